@@ -1,0 +1,42 @@
+#pragma once
+// Occupancy parameters shared by every grid of one VOG-Map (thesis Eq. 3.2-3.5). Defaults are OctoMap's
+// (Hornung 2013) and the thesis's resolution (Table 4.2).
+
+#include "vog/geometry/result.hpp"
+
+#include <cmath>
+#include <cstdint>
+
+namespace vog::map {
+
+enum class Occupancy : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
+
+const char* toString(Occupancy status);
+
+inline double logOdds(double probability) { return std::log(probability / (1.0 - probability)); }
+
+struct GridConfig {
+  double resolution_m = 0.095;        // thesis Table 4.2
+  double prob_hit = 0.7;              // OctoMap default
+  double prob_miss = 0.4;             // OctoMap default
+  double clamp_min = 0.1192;          // OctoMap default clamping thresholds
+  double clamp_max = 0.971;
+  double occupancy_threshold = 0.5;   // occupied when P > threshold
+  double max_range_m = 11.0;          // beams integrate up to here; thesis Table 4.2 sensor d_max
+  double cloud_voxel_m = 0.19;        // downsampling of the cached occupied cloud (2 x resolution)
+  int normal_neighbours = 10;         // neighbours for the PCA normal of each cloud point
+
+  // Names the first bad key and value, or is ok.
+  Status validate() const;
+
+  double logOddsMin() const { return logOdds(clamp_min); }
+  double logOddsMax() const { return logOdds(clamp_max); }
+  double logOddsOccupied() const { return logOdds(occupancy_threshold); }
+  double clamp(double l) const { return std::fmax(logOddsMin(), std::fmin(logOddsMax(), l)); }
+  // Status of a known voxel from its (clamped) log-odds.
+  Occupancy classify(double log_odds) const {
+    return log_odds > logOddsOccupied() ? Occupancy::kOccupied : Occupancy::kFree;
+  }
+};
+
+}  // namespace vog::map

@@ -1,0 +1,104 @@
+#pragma once
+// LocalGrid (thesis 3.2): one OctoMap OcTree holding the scans of one submap, in the frame of its base
+// pose (the pose of the submap's first scan).
+//
+// Lifecycle: mutable while scans are inserted; `finalize()` makes it immutable and computes the cached
+// AABB of its known space and its downsampled occupied point cloud with normals (thesis 4.2 caches this
+// for ICP). After finalize() only its base pose changes, and that pose lives in the VogMap, not here.
+// A finalized grid is shared read-only (std::shared_ptr<const LocalGrid>) and safe for concurrent readers.
+
+#include "vog/geometry/point_cloud.hpp"
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/geometry/sonar.hpp"
+#include "vog/map/grid_config.hpp"
+#include "vog/map/voxel_key.hpp"
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace octomap {
+class OcTree;
+}
+
+namespace vog::map {
+
+// One beam from a common origin: its end point, and whether the end is a return (occupied) or the
+// beam ran free to there.
+struct BeamEnd {
+  Eigen::Vector3d end_grid;
+  bool hit = true;
+};
+
+class LocalGrid {
+ public:
+  static Result<std::unique_ptr<LocalGrid>> create(const GridConfig& config);
+  // Adopts a tree read from disk (resolution must match config); the grid is finalized.
+  static Result<std::unique_ptr<LocalGrid>> fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
+  static Result<std::unique_ptr<LocalGrid>> load(const GridConfig& config, const std::filesystem::path& ot_file);
+
+  ~LocalGrid();
+  LocalGrid(const LocalGrid&) = delete;
+  LocalGrid& operator=(const LocalGrid&) = delete;
+
+  // Integrates one sonar ping by log-odds ray casting (thesis Eq. 3.3-3.4). T_grid_sensor is the sensor
+  // pose in this grid's frame. A return marks free space up to it and the end voxel occupied; a beam with
+  // no return (or a return beyond max_range_m) marks free space up to max_range_m. Returns an error and
+  // leaves the grid unchanged on a finalized grid, an invalid pose, a NaN or negative range, or a scan
+  // whose beam count differs from the fan's.
+  Status insertScan(const geometry::Pose3& T_grid_sensor, const geometry::SonarFan& fan,
+                    const geometry::RangeScan& scan);
+  // The same for arbitrary rays from one origin (grid frame); ends are clipped to max_range_m.
+  Status insertRays(const Eigen::Vector3d& origin_grid, std::span<const BeamEnd> beams);
+
+  void finalize();
+  bool finalized() const { return finalized_; }
+
+  // Log-odds of the voxel containing p (grid frame), or nullopt where the grid knows nothing.
+  std::optional<float> logOdds(const Eigen::Vector3d& p_grid) const;
+  // Log-odds at an integer voxel key of this grid, nullopt when unknown.
+  std::optional<float> logOddsAt(const VoxelKey& key) const;
+
+  const GridConfig& config() const { return config_; }
+  double resolution() const { return config_.resolution_m; }
+  double invResolution() const { return inv_resolution_; }
+  const octomap::OcTree& tree() const { return *tree_; }
+  std::size_t scanCount() const { return scan_count_; }
+
+  // Valid after finalize(): inclusive voxel-key box and metric box of known space (grid frame); the key
+  // box is empty for a grid that knows nothing.
+  const KeyBox& knownKeys() const { return known_keys_; }
+  Eigen::AlignedBox3d knownBox() const;
+  // Downsampled centres of occupied voxels with unit normals (grid frame), oriented towards the sensor.
+  const geometry::PointCloud& cloud() const { return cloud_; }
+  Eigen::Vector3d cloudCentroid() const;
+
+  // Every leaf of the tree: the inclusive key box it covers and its log-odds.
+  struct Leaf {
+    VoxelKey min;
+    VoxelKey max;
+    float log_odds;
+  };
+  std::vector<Leaf> leaves() const;
+
+  Status save(const std::filesystem::path& ot_file) const;
+
+ private:
+  LocalGrid(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
+  void computeKnownBox();
+  void computeCloud();
+
+  GridConfig config_;
+  double inv_resolution_;
+  std::unique_ptr<octomap::OcTree> tree_;
+  std::size_t scan_count_ = 0;
+  bool finalized_ = false;
+  std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted
+  KeyBox known_keys_;
+  geometry::PointCloud cloud_;
+};
+
+}  // namespace vog::map

@@ -1,0 +1,291 @@
+#include "vog/map/merged_map.hpp"
+
+#include <octomap/OcTree.h>
+
+#include <cmath>
+
+namespace vog::map {
+
+namespace {
+constexpr int kPackBits = 21;
+constexpr std::uint64_t kPackMask = (std::uint64_t{1} << kPackBits) - 1;
+constexpr int kPackBias = 1 << (kPackBits - 1);
+}  // namespace
+
+Status MergeConfig::validate() const {
+  if (!(remerge_translation_m >= 0.0) || !std::isfinite(remerge_translation_m))
+    return Error{"merge.remerge_translation_m must be finite and >= 0, got " + std::to_string(remerge_translation_m)};
+  if (!(remerge_rotation_rad >= 0.0) || !std::isfinite(remerge_rotation_rad))
+    return Error{"merge.remerge_rotation_rad must be finite and >= 0, got " + std::to_string(remerge_rotation_rad)};
+  return {};
+}
+
+std::uint64_t MergedMap::packBlock(const VoxelKey& b) {
+  return (static_cast<std::uint64_t>(b.x() + kPackBias) & kPackMask) |
+         ((static_cast<std::uint64_t>(b.y() + kPackBias) & kPackMask) << kPackBits) |
+         ((static_cast<std::uint64_t>(b.z() + kPackBias) & kPackMask) << (2 * kPackBits));
+}
+
+VoxelKey MergedMap::unpackBlock(std::uint64_t p) {
+  return {static_cast<int>(p & kPackMask) - kPackBias, static_cast<int>((p >> kPackBits) & kPackMask) - kPackBias,
+          static_cast<int>((p >> (2 * kPackBits)) & kPackMask) - kPackBias};
+}
+
+Result<std::unique_ptr<MergedMap>> MergedMap::create(const GridConfig& config) {
+  if (auto s = config.validate(); !s) return s.error();
+  return std::unique_ptr<MergedMap>(new MergedMap(config));
+}
+
+const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
+  const auto it = blocks_.find(packBlock(blockOf(key)));
+  return it == blocks_.end() ? nullptr : it->second.get();
+}
+
+VoxelValue MergedMap::valueOf(const Block& block, int index) const {
+  const auto i = static_cast<std::size_t>(index);
+  if (block.count[i] == 0) return {};
+  const double clamped = config_.clamp(static_cast<double>(block.sum[i]) / kFixedScale);
+  return {clamped, config_.classify(clamped)};
+}
+
+VoxelValue MergedMap::at(const VoxelKey& key) const {
+  const Block* block = findBlock(key);
+  return block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{};
+}
+
+VoxelValue MergedMap::query(const Eigen::Vector3d& p_world) const {
+  if (!p_world.allFinite()) return {};
+  return at(pointToKey(p_world, inv_resolution_));
+}
+
+std::vector<LineSample> MergedMap::lineQuery(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2) const {
+  std::vector<LineSample> out;
+  if (!p1.allFinite() || !p2.allFinite()) return out;
+  const double length = (p2 - p1).norm();
+  const Eigen::Vector3d v = length > 0.0 ? Eigen::Vector3d((p2 - p1) / length) : Eigen::Vector3d::Zero();
+  const double step = config_.resolution_m;
+  const auto n = static_cast<int>(std::floor(length / step));
+  out.reserve(static_cast<std::size_t>(n) + 1);
+  const Block* block = nullptr;
+  std::uint64_t block_packed = ~std::uint64_t{0};
+  for (int k = 0; k <= n; ++k) {
+    const Eigen::Vector3d x = p1 + (k * step) * v;
+    const VoxelKey key = pointToKey(x, inv_resolution_);
+    const std::uint64_t packed = packBlock(blockOf(key));
+    if (packed != block_packed) {
+      block_packed = packed;
+      const auto it = blocks_.find(packed);
+      block = it == blocks_.end() ? nullptr : it->second.get();
+    }
+    out.push_back({x, block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{}});
+  }
+  return out;
+}
+
+CastResult MergedMap::castRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& end) const {
+  CastResult result;
+  traverse(origin, end, [&](const VoxelKey& key, const VoxelValue& value) {
+    if (value.status == Occupancy::kOccupied) {
+      result.hit = true;
+      result.hit_world = keyToCentre(key, config_.resolution_m);
+      return false;
+    }
+    (value.status == Occupancy::kFree ? result.n_free : result.n_unknown)++;
+    return true;
+  });
+  return result;
+}
+
+Status MergedMap::add(const SubmapEntry& entry) {
+  if (!entry.grid) return Error{"merge: submap " + std::to_string(entry.id) + " has no grid"};
+  if (!entry.grid->finalized()) return Error{"merge: submap " + std::to_string(entry.id) + " is not finalized"};
+  if (std::abs(entry.grid->resolution() - config_.resolution_m) > 1e-12) {
+    return Error{"merge: submap " + std::to_string(entry.id) + " resolution " +
+                 std::to_string(entry.grid->resolution()) + " differs from " + std::to_string(config_.resolution_m)};
+  }
+  if (!geometry::isValidPose(entry.T_world_submap) || !geometry::isValidPose(entry.T_submap_world)) {
+    return Error{"merge: pose of submap " + std::to_string(entry.id) + " is not a finite rigid transform"};
+  }
+  if (merged_.count(entry.id) != 0) return Error{"merge: submap " + std::to_string(entry.id) + " is already merged"};
+  if (merged_.size() >= std::numeric_limits<std::uint16_t>::max()) return Error{"merge: too many submaps (65535)"};
+  ++version_;
+  apply(entry, +1);
+  merged_.emplace(entry.id, entry);
+  return {};
+}
+
+Status MergedMap::remove(SubmapId id) {
+  const auto it = merged_.find(id);
+  if (it == merged_.end()) return Error{"merge: submap " + std::to_string(id) + " is not merged"};
+  ++version_;
+  apply(it->second, -1);
+  merged_.erase(it);
+  return {};
+}
+
+Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config) {
+  if (auto s = config.validate(); !s) return s.error();
+  // Validate everything before changing anything.
+  std::map<SubmapId, const SubmapEntry*> wanted;
+  for (const auto& e : entries) {
+    if (!wanted.emplace(e.id, &e).second) return Error{"merge: submap id " + std::to_string(e.id) + " listed twice"};
+    if (!e.grid || !e.grid->finalized()) return Error{"merge: submap " + std::to_string(e.id) + " is not finalized"};
+    if (std::abs(e.grid->resolution() - config_.resolution_m) > 1e-12)
+      return Error{"merge: submap " + std::to_string(e.id) + " has a different resolution"};
+    if (!geometry::isValidPose(e.T_world_submap))
+      return Error{"merge: pose of submap " + std::to_string(e.id) + " is not a finite rigid transform"};
+  }
+  SyncStats stats;
+  std::vector<SubmapId> gone;
+  for (const auto& [id, e] : merged_) {
+    if (wanted.count(id) == 0) gone.push_back(id);
+  }
+  for (SubmapId id : gone) {
+    (void)remove(id);
+    ++stats.removed;
+  }
+  for (const auto& e : entries) {
+    const auto it = merged_.find(e.id);
+    if (it == merged_.end()) {
+      if (auto s = add(e); !s) return s.error();
+      ++stats.added;
+      continue;
+    }
+    const SubmapEntry& old = it->second;
+    const bool moved = old.grid != e.grid ||
+                       geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
+                       geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad ||
+                       (config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0 &&
+                        !old.T_world_submap.isApprox(e.T_world_submap, 0.0));
+    if (!moved) continue;
+    (void)remove(e.id);
+    if (auto s = add(e); !s) return s.error();
+    ++stats.remerged;
+  }
+  return stats;
+}
+
+void MergedMap::apply(const SubmapEntry& entry, int sign) {
+  const double res = config_.resolution_m;
+  const Eigen::Matrix3d R = entry.T_world_submap.linear();
+  const Eigen::Matrix3d R_abs = R.cwiseAbs();
+  const Eigen::Vector3d t = entry.T_world_submap.translation();
+
+  Block* block = nullptr;
+  std::uint64_t block_packed = ~std::uint64_t{0};
+  std::vector<std::uint64_t> emptied;
+
+  for (const LocalGrid::Leaf& leaf : entry.grid->leaves()) {
+    // World box of the leaf's rotated cube; global centres inside it are the candidates.
+    const Eigen::Vector3d lo = leaf.min.cast<double>() * res;
+    const Eigen::Vector3d hi = (leaf.max.cast<double>().array() + 1.0).matrix() * res;
+    const Eigen::Vector3d centre_world = R * (0.5 * (lo + hi)) + t;
+    const Eigen::Vector3d extent_world = R_abs * (0.5 * (hi - lo));
+    VoxelKey gmin;
+    VoxelKey gmax;
+    for (int i = 0; i < 3; ++i) {
+      // Centre (g + 0.5) * res within [c - e, c + e], widened by a hair: candidates are verified below.
+      gmin[i] = static_cast<int>(std::ceil((centre_world[i] - extent_world[i]) * inv_resolution_ - 0.5 - 1e-6));
+      gmax[i] = static_cast<int>(std::floor((centre_world[i] + extent_world[i]) * inv_resolution_ - 0.5 + 1e-6));
+    }
+    const std::int64_t delta = sign * std::llround(static_cast<double>(leaf.log_odds) * kFixedScale);
+    const int count_delta = sign;
+    VoxelKey g;
+    for (g.z() = gmin.z(); g.z() <= gmax.z(); ++g.z()) {
+      for (g.y() = gmin.y(); g.y() <= gmax.y(); ++g.y()) {
+        for (g.x() = gmin.x(); g.x() <= gmax.x(); ++g.x()) {
+          const VoxelKey local = pointToKey(entry.toSubmap(keyToCentre(g, res)), inv_resolution_);
+          if ((local.array() < leaf.min.array()).any() || (local.array() > leaf.max.array()).any()) continue;
+          const std::uint64_t packed = packBlock(blockOf(g));
+          if (packed != block_packed) {
+            block_packed = packed;
+            auto& slot = blocks_[packed];
+            if (!slot) {
+              slot = std::make_shared<Block>();
+            } else if (slot.use_count() > 1) {
+              slot = std::make_shared<Block>(*slot);  // a snapshot holds it: copy on write
+            }
+            block = slot.get();
+            block->version = version_;
+          }
+          const auto i = static_cast<std::size_t>(indexIn(g));
+          const std::uint16_t before = block->count[i];
+          block->sum[i] += delta;
+          block->count[i] = static_cast<std::uint16_t>(before + count_delta);
+          if (before == 0) ++block->n_known;
+          if (block->count[i] == 0) {
+            --block->n_known;
+            if (block->n_known == 0) emptied.push_back(packed);
+          }
+        }
+      }
+    }
+  }
+  for (std::uint64_t packed : emptied) {
+    const auto it = blocks_.find(packed);
+    if (it != blocks_.end() && it->second->n_known == 0) blocks_.erase(it);
+  }
+}
+
+std::shared_ptr<const MergedMap> MergedMap::snapshot() const { return std::make_shared<const MergedMap>(*this); }
+
+std::size_t MergedMap::knownVoxelCount() const {
+  std::size_t n = 0;
+  for (const auto& [packed, block] : blocks_) n += block->n_known;
+  return n;
+}
+
+std::size_t MergedMap::memoryBytes() const {
+  // Blocks, their control blocks and the hash table's nodes and buckets.
+  const std::size_t per_block = sizeof(Block) + 2 * sizeof(void*) + sizeof(std::uint64_t) +
+                                sizeof(std::shared_ptr<Block>) + 2 * sizeof(void*);
+  return blocks_.size() * per_block + blocks_.bucket_count() * sizeof(void*);
+}
+
+std::vector<std::pair<VoxelKey, std::shared_ptr<const MergedMap::Block>>> MergedMap::blocksChangedSince(
+    std::uint64_t since_version) const {
+  std::vector<std::pair<VoxelKey, std::shared_ptr<const Block>>> out;
+  for (const auto& [packed, block] : blocks_) {
+    if (block->version > since_version) out.emplace_back(unpackBlock(packed) * kBlockSide, block);
+  }
+  return out;
+}
+
+bool MergedMap::sameVoxels(const MergedMap& other) const {
+  if (blocks_.size() != other.blocks_.size()) return false;
+  for (const auto& [packed, block] : blocks_) {
+    const auto it = other.blocks_.find(packed);
+    if (it == other.blocks_.end()) return false;
+    if (block->sum != it->second->sum || block->count != it->second->count) return false;
+  }
+  return true;
+}
+
+std::unique_ptr<octomap::OcTree> MergedMap::toOcTree() const {
+  auto tree = std::make_unique<octomap::OcTree>(config_.resolution_m);
+  tree->setProbHit(config_.prob_hit);
+  tree->setProbMiss(config_.prob_miss);
+  tree->setClampingThresMin(config_.clamp_min);
+  tree->setClampingThresMax(config_.clamp_max);
+  tree->setOccupancyThres(config_.occupancy_threshold);
+  forEachKnown([&](const VoxelKey& key, const VoxelValue& value) {
+    octomap::OcTreeKey k;
+    for (int i = 0; i < 3; ++i) k[static_cast<unsigned>(i)] = static_cast<octomap::key_type>(key[i] + 32768);
+    tree->setNodeValue(k, static_cast<float>(value.log_odds), true);
+  });
+  tree->updateInnerOccupancy();
+  return tree;
+}
+
+Status MergedMap::writeOt(const std::filesystem::path& file) const {
+  if (!toOcTree()->write(file.string())) return Error{"cannot write " + file.string()};
+  return {};
+}
+
+Status MergedMap::writeBt(const std::filesystem::path& file) const {
+  auto tree = toOcTree();
+  if (!tree->writeBinary(file.string())) return Error{"cannot write " + file.string()};
+  return {};
+}
+
+}  // namespace vog::map
