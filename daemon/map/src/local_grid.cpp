@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <bit>
 #include <unordered_map>
 
 namespace vog::map {
@@ -143,6 +144,7 @@ Status LocalGrid::insertRays(const Eigen::Vector3d& origin_grid, std::span<const
 void LocalGrid::finalize() {
   if (finalized_) return;
   tree_->updateInnerOccupancy();
+  cacheLeaves();
   computeKnownBox();
   computeCloud();
   finalized_ = true;
@@ -163,16 +165,14 @@ std::optional<float> LocalGrid::logOdds(const Eigen::Vector3d& p_grid) const {
 
 std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
   std::vector<Leaf> out;
-  out.reserve(tree_->getNumLeafNodes());
   const unsigned max_depth = tree_->getTreeDepth();
   for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
     // A leaf at depth d covers 2^(16-d) voxels per axis; its key is the voxel just above its centre.
     const int span = 1 << (max_depth - it.getDepth());
-    const int half = span / 2;
     const octomap::OcTreeKey& k = it.getKey();
     Leaf leaf;
     for (int i = 0; i < 3; ++i) {
-      leaf.min[i] = static_cast<int>(k[static_cast<unsigned>(i)]) - kOctoOffset - half;
+      leaf.min[i] = static_cast<int>(k[static_cast<unsigned>(i)]) - kOctoOffset - span / 2;
       leaf.max[i] = leaf.min[i] + span - 1;
     }
     leaf.log_odds = it->getLogOdds();
@@ -181,9 +181,23 @@ std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
   return out;
 }
 
+void LocalGrid::cacheLeaves() {
+  const auto all = leaves();
+  packed_leaves_.clear();
+  packed_leaves_.reserve(all.size());
+  for (const Leaf& leaf : all) {
+    PackedLeaf p;
+    for (int i = 0; i < 3; ++i) p.min[i] = static_cast<std::int16_t>(leaf.min[i]);
+    p.span_log2 = static_cast<std::uint8_t>(std::countr_zero(static_cast<unsigned>(leaf.max.x() - leaf.min.x() + 1)));
+    p.log_odds = leaf.log_odds;
+    packed_leaves_.push_back(p);
+  }
+  packed_leaves_.shrink_to_fit();
+}
+
 void LocalGrid::computeKnownBox() {
   known_keys_ = KeyBox{};
-  for (const Leaf& leaf : leaves()) known_keys_.extend(leaf.min, leaf.max);
+  forEachLeaf([&](const Leaf& leaf) { known_keys_.extend(leaf.min, leaf.max); });
 }
 
 Eigen::AlignedBox3d LocalGrid::knownBox() const {
@@ -211,8 +225,8 @@ void LocalGrid::computeCloud() {
   std::unordered_map<VoxelKey, Cell, decltype(hash)> cells(1024, hash);
   const double inv_cell = 1.0 / config_.cloud_voxel_m;
   const double occupied = config_.logOddsOccupied();
-  for (const Leaf& leaf : leaves()) {
-    if (static_cast<double>(leaf.log_odds) <= occupied) continue;
+  forEachLeaf([&](const Leaf& leaf) {
+    if (static_cast<double>(leaf.log_odds) <= occupied) return;
     for (int x = leaf.min.x(); x <= leaf.max.x(); ++x)
       for (int y = leaf.min.y(); y <= leaf.max.y(); ++y)
         for (int z = leaf.min.z(); z <= leaf.max.z(); ++z) {
@@ -221,7 +235,7 @@ void LocalGrid::computeCloud() {
           cell.sum += c;
           ++cell.n;
         }
-  }
+  });
   // Deterministic order: sort cells by key.
   std::vector<std::pair<VoxelKey, Eigen::Vector3d>> ordered;
   ordered.reserve(cells.size());

@@ -175,7 +175,7 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
   std::uint64_t block_packed = ~std::uint64_t{0};
   std::vector<std::uint64_t> emptied;
 
-  for (const LocalGrid::Leaf& leaf : entry.grid->leaves()) {
+  entry.grid->forEachLeaf([&](const LocalGrid::Leaf& leaf) {
     // World box of the leaf's rotated cube; global centres inside it are the candidates.
     const Eigen::Vector3d lo = leaf.min.cast<double>() * res;
     const Eigen::Vector3d hi = (leaf.max.cast<double>().array() + 1.0).matrix() * res;
@@ -220,7 +220,7 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
         }
       }
     }
-  }
+  });
   for (std::uint64_t packed : emptied) {
     const auto it = blocks_.find(packed);
     if (it != blocks_.end() && it->second->n_known == 0) blocks_.erase(it);

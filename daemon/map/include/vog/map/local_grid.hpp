@@ -83,11 +83,22 @@ class LocalGrid {
     float log_odds;
   };
   std::vector<Leaf> leaves() const;
+  // The same leaves from the compact copy cached by finalize() (merging walks them many times; the
+  // OctoMap leaf iterator costs as much as the merge itself). Finalized grids only.
+  template <class F>
+  void forEachLeaf(F&& f) const;
 
   Status save(const std::filesystem::path& ot_file) const;
 
  private:
   LocalGrid(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
+  // A leaf in 12 bytes: its minimum voxel key (local keys fit 16 bits) and its side as a power of two.
+  struct PackedLeaf {
+    std::int16_t min[3];
+    std::uint8_t span_log2;
+    float log_odds;
+  };
+  void cacheLeaves();
   void computeKnownBox();
   void computeCloud();
 
@@ -97,8 +108,21 @@ class LocalGrid {
   std::size_t scan_count_ = 0;
   bool finalized_ = false;
   std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted
+  std::vector<PackedLeaf> packed_leaves_;
   KeyBox known_keys_;
   geometry::PointCloud cloud_;
 };
+
+template <class F>
+void LocalGrid::forEachLeaf(F&& f) const {
+  Leaf leaf;
+  for (const PackedLeaf& p : packed_leaves_) {
+    const int last = (1 << p.span_log2) - 1;
+    leaf.min = VoxelKey(p.min[0], p.min[1], p.min[2]);
+    leaf.max = leaf.min + VoxelKey::Constant(last);
+    leaf.log_odds = p.log_odds;
+    f(leaf);
+  }
+}
 
 }  // namespace vog::map

@@ -13,8 +13,13 @@ namespace vog::map {
 
 using VoxelKey = Eigen::Vector3i;
 
+// floor(inv_resolution * coordinate) for finite values within int range. Written as truncate-and-fix
+// because std::floor compiles to a slow bit-twiddling sequence on baseline x86-64; the integer result
+// is identical to floor's for every such input.
 inline int coordToIndex(double coordinate, double inv_resolution) {
-  return static_cast<int>(std::floor(inv_resolution * coordinate));
+  const double x = inv_resolution * coordinate;
+  const int truncated = static_cast<int>(x);
+  return truncated - (x < static_cast<double>(truncated) ? 1 : 0);
 }
 
 inline VoxelKey pointToKey(const Eigen::Vector3d& p, double inv_resolution) {

@@ -1,0 +1,183 @@
+// vog-bench map: builds a synthetic VogMap (submaps of 100 sonar scans of 96 beams at 0.095 m on an
+// orbit around a pier, ranges up to 5.6 m) and times merging and queries. Prints JSON.
+#include "bench_registry.hpp"
+#include "synthetic_scene.hpp"
+
+#include "vog/map/merged_map.hpp"
+
+#include <CLI/CLI.hpp>
+#include <octomap/OcTree.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <random>
+#include <thread>
+
+namespace {
+
+using namespace vog;
+
+struct MapBenchOptions {
+  int submaps = 300;
+  int scans = 100;
+  int threads = 2;
+  std::uint64_t seed = 1;
+};
+
+std::vector<map::SubmapEntry> buildSubmaps(const MapBenchOptions& opt, const map::GridConfig& config) {
+  const auto scene = test::SyntheticScene::pier();
+  geometry::SonarFan fan;
+  fan.max_range_m = 5.6;
+  const auto poses = test::orbitTrajectory(opt.submaps * opt.scans, 5.5, -2.0);
+  std::vector<map::SubmapEntry> entries(static_cast<std::size_t>(opt.submaps));
+  // Building is embarrassingly parallel across submaps; each submap draws noise from its own seed.
+  auto work = [&](int first, int step) {
+    for (int s = first; s < opt.submaps; s += step) {
+      std::mt19937_64 rng(opt.seed * 1000003u + static_cast<std::uint64_t>(s));
+      auto grid = map::LocalGrid::create(config).value();
+      const auto base = static_cast<std::size_t>(s * opt.scans);
+      const geometry::Pose3 T_base_world = poses[base].inverse();
+      for (int k = 0; k < opt.scans; ++k) {
+        const geometry::Pose3& T = poses[base + static_cast<std::size_t>(k)];
+        (void)grid->insertScan(T_base_world * T * fan.T_vehicle_sensor, fan, scene.scan(T, fan, 0.01, rng));
+      }
+      grid->finalize();
+      auto& e = entries[static_cast<std::size_t>(s)];
+      e.id = static_cast<map::SubmapId>(s);
+      e.grid = std::move(grid);
+      e.T_world_submap = poses[base];
+      e.T_submap_world = T_base_world;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < opt.threads; ++t) pool.emplace_back(work, t, opt.threads);
+  for (auto& t : pool) t.join();
+  return entries;
+}
+
+template <class F>
+double nsPerCall(int n, F&& f) {
+  const bench::Stopwatch sw;
+  for (int i = 0; i < n; ++i) f(i);
+  return sw.seconds() * 1e9 / n;
+}
+
+}  // namespace
+
+VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, partial re-merge, queries") {
+  MapBenchOptions opt;
+  bool json = false;
+  CLI::App app{"vog-bench map"};
+  app.add_option("--submaps", opt.submaps, "number of submaps")->check(CLI::Range(2, 5000));
+  app.add_option("--scans", opt.scans, "scans per submap")->check(CLI::Range(1, 10000));
+  app.add_option("--threads", opt.threads, "threads used to build the submaps (not timed)")->check(CLI::Range(1, 64));
+  app.add_option("--seed", opt.seed, "noise seed");
+  app.add_flag("--json", json, "print JSON (the only output format)");
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const map::GridConfig config;  // resolution 0.095 m
+  const bench::Stopwatch build_clock;
+  const auto entries = buildSubmaps(opt, config);
+  const double build_s = build_clock.seconds();
+  std::fprintf(stderr, "built %d submaps in %.1f s\n", opt.submaps, build_s);
+
+  auto vog = map::VogMap::create(config).value();
+  for (const auto& e : entries) (void)vog->addSubmap(e.id, e.grid, e.T_world_submap);
+  std::size_t leaves = 0;
+  for (const auto& e : entries) leaves += e.grid->tree().getNumLeafNodes();
+
+  // Merge from scratch, one submap at a time (each add is the incremental step of a growing map).
+  std::vector<double> scratch_s;
+  std::vector<double> add_ms;
+  std::unique_ptr<map::MergedMap> merged;
+  for (int rep = 0; rep < 3; ++rep) {
+    merged = map::MergedMap::create(config).value();
+    const bench::Stopwatch sw;
+    for (const auto& e : entries) {
+      const bench::Stopwatch one;
+      (void)merged->add(e);
+      if (rep == 0) add_ms.push_back(one.seconds() * 1e3);
+    }
+    scratch_s.push_back(sw.seconds());
+  }
+
+  // Partial re-merge: 10 of N submaps moved (a loop closure), the rest unchanged.
+  std::mt19937_64 rng(opt.seed);
+  std::vector<double> remerge_ms;
+  std::vector<double> snapshot_ms;
+  for (int rep = 0; rep < 7; ++rep) {
+    auto poses = vog->poses();
+    std::uniform_int_distribution<std::size_t> pick(0, poses.size() - 1);
+    std::uniform_real_distribution<double> u(-0.1, 0.1);
+    for (int k = 0; k < 10; ++k) {
+      auto& T = poses[pick(rng)];
+      T = geometry::poseFromXyzRpy(u(rng), u(rng), 0.2 * u(rng), 0.0, 0.0, 0.2 * u(rng)) * T;
+    }
+    (void)vog->deform(poses);
+    const auto current = vog->entries();
+    const bench::Stopwatch sw;
+    (void)merged->sync(current, map::MergeConfig{});
+    remerge_ms.push_back(sw.seconds() * 1e3);
+    const bench::Stopwatch snap;
+    const auto s = merged->snapshot();
+    snapshot_ms.push_back(snap.seconds() * 1e3);
+  }
+
+  // Queries at random points of the mapped region, and 5 m rays.
+  const auto snap = merged->snapshot();
+  std::uniform_real_distribution<double> uxy(-8.0, 8.0);
+  std::uniform_real_distribution<double> uz(-4.0, 0.0);
+  std::vector<Eigen::Vector3d> points(200000);
+  for (auto& p : points) p = {uxy(rng), uxy(rng), uz(rng)};
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> rays(4000);
+  for (auto& [a, b] : rays) {
+    a = {uxy(rng), uxy(rng), uz(rng)};
+    Eigen::Vector3d d(uxy(rng), uxy(rng), 0.3 * uz(rng));
+    b = a + 5.0 * d.normalized();
+  }
+  double sink = 0.0;
+  std::vector<double> merged_ns;
+  std::vector<double> seq_ns;
+  std::vector<double> line_merged_us;
+  std::vector<double> line_vog_us;
+  for (int rep = 0; rep < 5; ++rep) {
+    merged_ns.push_back(nsPerCall(static_cast<int>(points.size()), [&](int i) {
+      sink += snap->query(points[static_cast<std::size_t>(i)]).log_odds;
+    }));
+    seq_ns.push_back(nsPerCall(2000, [&](int i) { sink += vog->query(points[static_cast<std::size_t>(i)]).log_odds; }));
+    line_merged_us.push_back(1e-3 * nsPerCall(static_cast<int>(rays.size()), [&](int i) {
+      const auto& [a, b] = rays[static_cast<std::size_t>(i)];
+      sink += static_cast<double>(snap->lineQuery(a, b).size());
+    }));
+    line_vog_us.push_back(1e-3 * nsPerCall(200, [&](int i) {
+      const auto& [a, b] = rays[static_cast<std::size_t>(i)];
+      sink += static_cast<double>(vog->lineQuery(a, b).size());
+    }));
+  }
+
+  bench::JsonObject out;
+  out.add("n_submaps", opt.submaps);
+  out.add("scans_per_submap", opt.scans);
+  out.add("resolution_m", config.resolution_m);
+  out.add("build_s", build_s);
+  out.add("leaves_per_submap", static_cast<double>(leaves) / opt.submaps);
+  out.add("known_voxels", static_cast<std::int64_t>(snap->knownVoxelCount()));
+  out.add("merge_scratch_s", bench::median(scratch_s));
+  out.add("merge_add_ms", bench::median(add_ms));
+  out.add("merge_add_ms_p95", bench::percentile(add_ms, 0.95));
+  out.add("remerge_k10_ms", bench::median(remerge_ms));
+  out.add("snapshot_ms", bench::median(snapshot_ms));
+  out.add("point_query_merged_ns", bench::median(merged_ns));
+  out.add("point_query_sequential_ns", bench::median(seq_ns));
+  out.add("line_query_merged_us", bench::median(line_merged_us));
+  out.add("line_query_vog_us", bench::median(line_vog_us));
+  out.add("merged_bytes_per_voxel",
+          static_cast<double>(snap->memoryBytes()) / static_cast<double>(std::max<std::size_t>(1, snap->knownVoxelCount())));
+  out.add("checksum", sink);
+  std::printf("%s\n", out.str().c_str());
+  return 0;
+}
