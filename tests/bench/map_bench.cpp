@@ -9,6 +9,7 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cstdio>
 #include <random>
 #include <thread>
@@ -22,6 +23,7 @@ struct MapBenchOptions {
   int scans = 100;
   int threads = 2;
   std::uint64_t seed = 1;
+  std::string out_dir;  // when set: the merged map (.bt, .ot) and the VogMap directory are written here
 };
 
 std::vector<map::SubmapEntry> buildSubmaps(const MapBenchOptions& opt, const map::GridConfig& config) {
@@ -73,6 +75,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   app.add_option("--threads", opt.threads, "threads used to build the submaps (not timed)")->check(CLI::Range(1, 64));
   app.add_option("--seed", opt.seed, "noise seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
+  app.add_option("--out", opt.out_dir, "write merged.bt, merged.ot and the VogMap (vogmap/) to this directory");
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
   } catch (const CLI::ParseError& e) {
@@ -157,6 +160,16 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
       const auto& [a, b] = rays[static_cast<std::size_t>(i)];
       sink += static_cast<double>(vog->lineQuery(a, b).size());
     }));
+  }
+
+  if (!opt.out_dir.empty()) {
+    const std::filesystem::path dir(opt.out_dir);
+    for (const auto& status : {snap->writeBt(dir / "merged.bt"), snap->writeOt(dir / "merged.ot"), vog->save(dir / "vogmap")}) {
+      if (!status.ok()) {
+        std::fprintf(stderr, "vog-bench map: %s\n", status.error().message.c_str());
+        return 1;
+      }
+    }
   }
 
   bench::JsonObject out;
