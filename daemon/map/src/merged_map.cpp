@@ -202,6 +202,7 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
             auto& slot = blocks_[packed];
             if (!slot) {
               slot = std::make_shared<Block>();
+              removed_.erase(packed);
             } else if (slot.use_count() > 1) {
               slot = std::make_shared<Block>(*slot);  // a snapshot holds it: copy on write
             }
@@ -223,7 +224,10 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
   });
   for (std::uint64_t packed : emptied) {
     const auto it = blocks_.find(packed);
-    if (it != blocks_.end() && it->second->n_known == 0) blocks_.erase(it);
+    if (it != blocks_.end() && it->second->n_known == 0) {
+      blocks_.erase(it);
+      removed_[packed] = version_;
+    }
   }
 }
 
@@ -247,6 +251,14 @@ std::vector<std::pair<VoxelKey, std::shared_ptr<const MergedMap::Block>>> Merged
   std::vector<std::pair<VoxelKey, std::shared_ptr<const Block>>> out;
   for (const auto& [packed, block] : blocks_) {
     if (block->version > since_version) out.emplace_back(unpackBlock(packed) * kBlockSide, block);
+  }
+  return out;
+}
+
+std::vector<VoxelKey> MergedMap::blocksRemovedSince(std::uint64_t since_version) const {
+  std::vector<VoxelKey> out;
+  for (const auto& [packed, version] : removed_) {
+    if (version > since_version) out.push_back(unpackBlock(packed) * kBlockSide);
   }
   return out;
 }

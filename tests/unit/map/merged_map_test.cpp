@@ -7,6 +7,8 @@
 #include <octomap/OcTree.h>
 
 #include <limits>
+#include <map>
+#include <tuple>
 
 namespace vog::map {
 namespace {
@@ -136,6 +138,39 @@ TEST_F(MergedMapTest, SnapshotsNeverChange) {
   const auto changed = merged->blocksChangedSince(v);
   EXPECT_GT(changed.size(), 0u);
   for (const auto& [origin, block] : changed) EXPECT_GT(block->version, v);
+}
+
+// A remote copy taken at one version catches up from the changed and removed blocks alone.
+TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
+  auto merged = MergedMap::create(config_).value();
+  const auto entries = vog_->entries();
+  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
+  std::map<std::tuple<int, int, int>, MergedMap::Block> mirror;
+  for (const auto& [origin, block] : merged->blocksChangedSince(0)) mirror[{origin.x(), origin.y(), origin.z()}] = *block;
+  const std::uint64_t seen = merged->version();
+
+  ASSERT_TRUE(merged->remove(entries[0].id).ok());
+  for (std::size_t i = 3; i < entries.size(); ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
+  const auto removed = merged->blocksRemovedSince(seen);
+  EXPECT_GT(removed.size(), 0u);
+  for (const auto& origin : removed) mirror.erase({origin.x(), origin.y(), origin.z()});
+  for (const auto& [origin, block] : merged->blocksChangedSince(seen)) mirror[{origin.x(), origin.y(), origin.z()}] = *block;
+
+  std::size_t known = 0;
+  for (const auto& [origin, block] : mirror) {
+    known += block.n_known;
+    for (int i = 0; i < MergedMap::kBlockVoxels; ++i) {
+      const VoxelKey k = VoxelKey(std::get<0>(origin), std::get<1>(origin), std::get<2>(origin)) +
+                         VoxelKey(i & 7, (i >> 3) & 7, i >> 6);
+      const VoxelValue v = merged->at(k);
+      ASSERT_EQ(v.status == Occupancy::kUnknown, block.count[static_cast<std::size_t>(i)] == 0);
+      if (v.status != Occupancy::kUnknown) {
+        ASSERT_EQ(v.log_odds, config_.clamp(static_cast<double>(block.sum[static_cast<std::size_t>(i)]) / MergedMap::kFixedScale));
+      }
+    }
+  }
+  EXPECT_EQ(known, merged->knownVoxelCount());
+  EXPECT_EQ(mirror.size(), merged->blockCount());
 }
 
 TEST_F(MergedMapTest, TraverseVisitsContiguousVoxelsAndAgreesWithPointQueries) {

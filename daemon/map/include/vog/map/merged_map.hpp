@@ -104,8 +104,11 @@ class MergedMap {
   // Calls f(key, value) for every known voxel, in no particular order.
   template <class F>
   void forEachKnown(F&& f) const;
-  // Block origins (key of voxel 0) of blocks changed after `since_version`, with their blocks.
+  // Block origins (key of voxel 0) of blocks changed after `since_version`, with their blocks, and the
+  // origins of blocks that became entirely unknown after it: together, what a remote copy taken at
+  // `since_version` needs to catch up.
   std::vector<std::pair<VoxelKey, std::shared_ptr<const Block>>> blocksChangedSince(std::uint64_t since_version) const;
+  std::vector<VoxelKey> blocksRemovedSince(std::uint64_t since_version) const;
   // Exact equality of the stored sums and counts (tests: incremental vs scratch).
   bool sameVoxels(const MergedMap& other) const;
 
@@ -137,6 +140,7 @@ class MergedMap {
   GridConfig config_;
   double inv_resolution_;
   std::unordered_map<std::uint64_t, std::shared_ptr<Block>> blocks_;
+  std::unordered_map<std::uint64_t, std::uint64_t> removed_;  // packed block -> version it was erased at
   std::map<SubmapId, SubmapEntry> merged_;  // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
 };
