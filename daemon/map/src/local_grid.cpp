@@ -224,7 +224,7 @@ void LocalGrid::computeCloud() {
   };
   std::unordered_map<VoxelKey, Cell, decltype(hash)> cells(1024, hash);
   const double inv_cell = 1.0 / config_.cloud_voxel_m;
-  const double occupied = config_.logOddsOccupied();
+  const double occupied = config_.bounds().occupied;
   forEachLeaf([&](const Leaf& leaf) {
     if (static_cast<double>(leaf.log_odds) <= occupied) return;
     for (int x = leaf.min.x(); x <= leaf.max.x(); ++x)

@@ -37,15 +37,14 @@ Result<std::unique_ptr<MergedMap>> MergedMap::create(const GridConfig& config) {
 }
 
 const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
-  const auto it = blocks_.find(packBlock(blockOf(key)));
-  return it == blocks_.end() ? nullptr : it->second.get();
+  return blocks_.find(packBlock(blockOf(key)));
 }
 
 VoxelValue MergedMap::valueOf(const Block& block, int index) const {
   const auto i = static_cast<std::size_t>(index);
   if (block.count[i] == 0) return {};
-  const double clamped = config_.clamp(static_cast<double>(block.sum[i]) / kFixedScale);
-  return {clamped, config_.classify(clamped)};
+  const double clamped = bounds_.clamp(static_cast<double>(block.sum[i]) / kFixedScale);
+  return {clamped, bounds_.classify(clamped)};
 }
 
 VoxelValue MergedMap::at(const VoxelKey& key) const {
@@ -74,8 +73,7 @@ std::vector<LineSample> MergedMap::lineQuery(const Eigen::Vector3d& p1, const Ei
     const std::uint64_t packed = packBlock(blockOf(key));
     if (packed != block_packed) {
       block_packed = packed;
-      const auto it = blocks_.find(packed);
-      block = it == blocks_.end() ? nullptr : it->second.get();
+      block = blocks_.find(packed);
     }
     out.push_back({x, block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{}});
   }
@@ -199,7 +197,7 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
           const std::uint64_t packed = packBlock(blockOf(g));
           if (packed != block_packed) {
             block_packed = packed;
-            auto& slot = blocks_[packed];
+            auto& slot = blocks_.slot(packed);
             if (!slot) {
               slot = std::make_shared<Block>();
               removed_.erase(packed);
@@ -223,9 +221,9 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
     }
   });
   for (std::uint64_t packed : emptied) {
-    const auto it = blocks_.find(packed);
-    if (it != blocks_.end() && it->second->n_known == 0) {
-      blocks_.erase(it);
+    const Block* b = blocks_.find(packed);
+    if (b != nullptr && b->n_known == 0) {
+      blocks_.erase(packed);
       removed_[packed] = version_;
     }
   }
@@ -235,23 +233,22 @@ std::shared_ptr<const MergedMap> MergedMap::snapshot() const { return std::make_
 
 std::size_t MergedMap::knownVoxelCount() const {
   std::size_t n = 0;
-  for (const auto& [packed, block] : blocks_) n += block->n_known;
+  blocks_.forEach([&](std::uint64_t, const std::shared_ptr<Block>& block) { n += block->n_known; });
   return n;
 }
 
 std::size_t MergedMap::memoryBytes() const {
-  // Blocks, their control blocks and the hash table's nodes and buckets.
-  const std::size_t per_block = sizeof(Block) + 2 * sizeof(void*) + sizeof(std::uint64_t) +
-                                sizeof(std::shared_ptr<Block>) + 2 * sizeof(void*);
-  return blocks_.size() * per_block + blocks_.bucket_count() * sizeof(void*);
+  // Blocks with their shared_ptr control blocks (make_shared: one allocation), and the table.
+  const std::size_t per_block = sizeof(Block) + 2 * sizeof(long) + 16;
+  return blocks_.size() * per_block + blocks_.memoryBytes();
 }
 
 std::vector<std::pair<VoxelKey, std::shared_ptr<const MergedMap::Block>>> MergedMap::blocksChangedSince(
     std::uint64_t since_version) const {
   std::vector<std::pair<VoxelKey, std::shared_ptr<const Block>>> out;
-  for (const auto& [packed, block] : blocks_) {
+  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
     if (block->version > since_version) out.emplace_back(unpackBlock(packed) * kBlockSide, block);
-  }
+  });
   return out;
 }
 
@@ -265,12 +262,12 @@ std::vector<VoxelKey> MergedMap::blocksRemovedSince(std::uint64_t since_version)
 
 bool MergedMap::sameVoxels(const MergedMap& other) const {
   if (blocks_.size() != other.blocks_.size()) return false;
-  for (const auto& [packed, block] : blocks_) {
-    const auto it = other.blocks_.find(packed);
-    if (it == other.blocks_.end()) return false;
-    if (block->sum != it->second->sum || block->count != it->second->count) return false;
-  }
-  return true;
+  bool same = true;
+  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
+    const Block* theirs = other.blocks_.find(packed);
+    same = same && theirs != nullptr && block->sum == theirs->sum && block->count == theirs->count;
+  });
+  return same;
 }
 
 std::unique_ptr<octomap::OcTree> MergedMap::toOcTree() const {

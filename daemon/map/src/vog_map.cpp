@@ -118,8 +118,8 @@ VoxelValue VogMap::sumAt(const Eigen::Vector3d& p_world, const std::vector<const
     }
   }
   if (known == 0) return {};
-  const double clamped = config_.clamp(sum);
-  return {clamped, config_.classify(clamped)};
+  const double clamped = bounds_.clamp(sum);
+  return {clamped, bounds_.classify(clamped)};
 }
 
 VoxelValue VogMap::query(const Eigen::Vector3d& p_world) const {

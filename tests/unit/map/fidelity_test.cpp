@@ -43,7 +43,7 @@ TEST(Fidelity, VogMapAgreesWithAGlobalGridOnAlmostEveryKnownVoxel) {
   std::size_t differ_merged = 0;
   std::size_t confusion[3][3] = {};
   for (const auto& leaf : global->leaves()) {
-    const Occupancy truth = config.classify(leaf.log_odds);
+    const Occupancy truth = config.bounds().classify(leaf.log_odds);
     for (int x = leaf.min.x(); x <= leaf.max.x(); ++x)
       for (int y = leaf.min.y(); y <= leaf.max.y(); ++y)
         for (int z = leaf.min.z(); z <= leaf.max.z(); ++z) {

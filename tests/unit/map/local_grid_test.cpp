@@ -56,8 +56,8 @@ TEST(LocalGrid, RepeatedHitsClampAtTheUpperBound) {
   auto grid = makeGrid();
   const std::vector<BeamEnd> beams = {{Eigen::Vector3d(1.0, 0.0, 0.0), true}};
   for (int i = 0; i < 40; ++i) ASSERT_TRUE(grid->insertRays(Eigen::Vector3d::Zero(), beams).ok());
-  EXPECT_NEAR(*grid->logOdds({1.0, 0.0, 0.0}), grid->config().logOddsMax(), 1e-5);
-  EXPECT_NEAR(*grid->logOdds({0.5, 0.0, 0.0}), grid->config().logOddsMin(), 1e-5);
+  EXPECT_NEAR(*grid->logOdds({1.0, 0.0, 0.0}), grid->config().bounds().max, 1e-5);
+  EXPECT_NEAR(*grid->logOdds({0.5, 0.0, 0.0}), grid->config().bounds().min, 1e-5);
 }
 
 TEST(LocalGrid, FinalizedGridIsImmutable) {

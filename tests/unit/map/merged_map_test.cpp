@@ -165,7 +165,7 @@ TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
       const VoxelValue v = merged->at(k);
       ASSERT_EQ(v.status == Occupancy::kUnknown, block.count[static_cast<std::size_t>(i)] == 0);
       if (v.status != Occupancy::kUnknown) {
-        ASSERT_EQ(v.log_odds, config_.clamp(static_cast<double>(block.sum[static_cast<std::size_t>(i)]) / MergedMap::kFixedScale));
+        ASSERT_EQ(v.log_odds, config_.bounds().clamp(static_cast<double>(block.sum[static_cast<std::size_t>(i)]) / MergedMap::kFixedScale));
       }
     }
   }

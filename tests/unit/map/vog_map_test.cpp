@@ -56,7 +56,7 @@ TEST(VogMap, SumsOnlySubmapsThatKnowThePointAndClamps) {
   for (SubmapId id = 4; id < 10; ++id) {
     ASSERT_TRUE(map->addSubmap(id, singleHitGrid({1.0, 0.0, 0.0}, 5), geometry::Pose3::Identity()).ok());
   }
-  EXPECT_NEAR(map->query({1.0, 0.0, 0.0}).log_odds, GridConfig{}.logOddsMax(), 1e-9);
+  EXPECT_NEAR(map->query({1.0, 0.0, 0.0}).log_odds, GridConfig{}.bounds().max, 1e-9);
 }
 
 TEST(VogMap, DeformMovesTheMapAndRejectsBadPoseLists) {

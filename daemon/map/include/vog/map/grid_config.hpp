@@ -15,6 +15,17 @@ const char* toString(Occupancy status);
 
 inline double logOdds(double probability) { return std::log(probability / (1.0 - probability)); }
 
+// The log-odds bounds of a GridConfig, computed once: clamping (Eq. 3.4) and classification of a
+// known voxel (occupied when above the occupancy threshold, as OctoMap's isNodeOccupied).
+struct LogOddsBounds {
+  double min = 0.0;
+  double max = 0.0;
+  double occupied = 0.0;
+
+  double clamp(double l) const { return std::fmax(min, std::fmin(max, l)); }
+  Occupancy classify(double l) const { return l > occupied ? Occupancy::kOccupied : Occupancy::kFree; }
+};
+
 struct GridConfig {
   double resolution_m = 0.095;        // thesis Table 4.2
   double prob_hit = 0.7;              // OctoMap default
@@ -29,14 +40,7 @@ struct GridConfig {
   // Names the first bad key and value, or is ok.
   Status validate() const;
 
-  double logOddsMin() const { return logOdds(clamp_min); }
-  double logOddsMax() const { return logOdds(clamp_max); }
-  double logOddsOccupied() const { return logOdds(occupancy_threshold); }
-  double clamp(double l) const { return std::fmax(logOddsMin(), std::fmin(logOddsMax(), l)); }
-  // Status of a known voxel from its (clamped) log-odds.
-  Occupancy classify(double log_odds) const {
-    return log_odds > logOddsOccupied() ? Occupancy::kOccupied : Occupancy::kFree;
-  }
+  LogOddsBounds bounds() const { return {logOdds(clamp_min), logOdds(clamp_max), logOdds(occupancy_threshold)}; }
 };
 
 }  // namespace vog::map

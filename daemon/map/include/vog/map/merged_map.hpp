@@ -21,6 +21,7 @@
 
 #include "vog/geometry/pose.hpp"
 #include "vog/geometry/result.hpp"
+#include "vog/map/block_table.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/vog_map.hpp"
 #include "vog/map/voxel_key.hpp"
@@ -121,7 +122,8 @@ class MergedMap {
   MergedMap& operator=(const MergedMap&) = delete;
 
  private:
-  explicit MergedMap(const GridConfig& config) : config_(config), inv_resolution_(1.0 / config.resolution_m) {}
+  explicit MergedMap(const GridConfig& config)
+      : config_(config), bounds_(config.bounds()), inv_resolution_(1.0 / config.resolution_m) {}
 
   static std::uint64_t packBlock(const VoxelKey& block);
   static VoxelKey unpackBlock(std::uint64_t packed);
@@ -138,8 +140,9 @@ class MergedMap {
   void apply(const SubmapEntry& entry, int sign);
 
   GridConfig config_;
+  LogOddsBounds bounds_;
   double inv_resolution_;
-  std::unordered_map<std::uint64_t, std::shared_ptr<Block>> blocks_;
+  BlockTable<Block> blocks_;
   std::unordered_map<std::uint64_t, std::uint64_t> removed_;  // packed block -> version it was erased at
   std::map<SubmapId, SubmapEntry> merged_;  // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
@@ -147,7 +150,7 @@ class MergedMap {
 
 template <class F>
 void MergedMap::forEachKnown(F&& f) const {
-  for (const auto& [packed, block] : blocks_) {
+  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
     const VoxelKey base = unpackBlock(packed) * kBlockSide;
     for (int i = 0; i < kBlockVoxels; ++i) {
       if (block->count[static_cast<std::size_t>(i)] == 0) continue;
@@ -155,7 +158,7 @@ void MergedMap::forEachKnown(F&& f) const {
                                            i >> (2 * kBlockBits));
       f(key, valueOf(*block, i));
     }
-  }
+  });
 }
 
 template <class Visit>

@@ -87,12 +87,13 @@ class VogMap {
   static Result<std::unique_ptr<VogMap>> load(const std::filesystem::path& dir);
 
  private:
-  explicit VogMap(const GridConfig& config) : config_(config) {}
+  explicit VogMap(const GridConfig& config) : config_(config), bounds_(config.bounds()) {}
   // Sum over the given entries; caller holds the lock.
   VoxelValue sumAt(const Eigen::Vector3d& p_world, const std::vector<const SubmapEntry*>& subset) const;
   std::vector<const SubmapEntry*> crossedBy(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2) const;
 
   const GridConfig config_;
+  const LogOddsBounds bounds_;
   mutable std::shared_mutex mutex_;
   std::vector<SubmapEntry> entries_;  // guarded by mutex_
 };
