@@ -1,0 +1,125 @@
+#pragma once
+// Registration of two submap point clouds (geometry::PointCloud, each in its own submap frame).
+// Both algorithms estimate T_target_source (source points mapped into the target frame) starting from
+// the odometry estimate, and return a result struct instead of failing silently (STYLE 10).
+//
+//  - icpPointToPoint2d: the baseline of Teixeira et al. 2016 / thesis 4.2.1 (PCL 2D point-to-point):
+//    only x, y and yaw change, z, roll and pitch stay at the initial value. Accept its result with
+//    checkIcpAcceptance() (thesis Alg. 6 criteria 1-3).
+//  - icpPointToPlane: Gauss-Newton point-to-plane ICP (Low 2004) on the 6-vector
+//    x = (x, y, z, roll, pitch, yaw) of T_target_source (pose_vector.hpp), degeneracy-aware as thesis
+//    Alg. 7 (Zhang et al. 2016, solution remapping): at every iteration A^T A (over the estimated
+//    components) is eigen-decomposed and the step is taken only along well-conditioned eigenvectors.
+//
+// Well-conditioned rule (replaces the thesis's heuristic lambda_min, which thesis 5.2 leaves open):
+// with point-to-plane residuals of standard deviation sigma_point_m, the Gauss-Newton estimate has
+// covariance sigma^2 (A^T A)^-1, so along a unit eigenvector v_i (eigenvalue lambda_i) its standard
+// deviation is sigma_point_m / sqrt(lambda_i). A direction is well-conditioned when that predicted
+// standard deviation is at most max_direction_stddev, i.e. lambda_i >= (sigma_point_m /
+// max_direction_stddev)^2. The eigenvectors mix metres and radians, so the bound reads as metres for
+// translations and radians for rotations (1 rad ~ 1 m lever arm, the size of a submap's features).
+// Note that the rule trusts the normals: noisy normals add spurious information along a wall, which
+// grows with the point count, so sigma_point_m should not be set below the real residual noise.
+
+#include "vog/geometry/point_cloud.hpp"
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/slam/pose_vector.hpp"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
+
+namespace vog::slam {
+
+struct IcpResult {
+  bool converged = false;
+  int iterations = 0;
+  double fitness_m2 = 0.0;  // mean squared distance between corresponding points at the result
+  std::size_t n_correspondences = 0;
+  geometry::Pose3 T_target_source = geometry::Pose3::Identity();
+  // A^T A / sigma^2 at the result over (x, y, z, roll, pitch, yaw); rows/columns of components that
+  // were not estimated are zero.
+  Matrix6d information = Matrix6d::Zero();
+  // sigma^2 sum_u v_u v_u^T / lambda_u: the covariance restricted to the well-conditioned subspace
+  // (zero along degenerate and non-estimated directions).
+  Matrix6d covariance = Matrix6d::Zero();
+  // Well-conditioned directions at the result, one orthonormal row per direction (k x 6), ordered
+  // by decreasing eigenvalue; eigenvalues of A^T A for those rows.
+  Eigen::MatrixXd V_u;
+  Eigen::VectorXd eigenvalues_u;
+  // All eigenvalues of A^T A over the estimated components, ascending.
+  Eigen::VectorXd eigenvalues;
+};
+
+struct PointToPoint2dConfig {
+  int max_iterations = 50;
+  double max_correspondence_distance_m = 1.0;
+  // Converged when the step is below both (PCL transformation epsilon) ...
+  double translation_epsilon_m = 1e-5;
+  double rotation_epsilon_rad = 1e-5;
+  // ... or the mean squared correspondence distance changes by less than this fraction (PCL
+  // euclidean fitness epsilon). Reaching max_iterations is not convergence.
+  double mse_relative_epsilon = 1e-8;
+  double sigma_point_m = 0.1;  // for the information matrix only
+  std::size_t min_points = 30;
+  std::size_t min_correspondences = 20;
+
+  Status validate() const;
+};
+
+Result<IcpResult> icpPointToPoint2d(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                                    const geometry::Pose3& T_target_source_init, const PointToPoint2dConfig& config);
+
+enum class IcpDofs {
+  kPlanar,  // x, y, yaw (the thesis's pose estimation problem, 4.2.1); z, roll, pitch held
+  kFull,    // all six components
+};
+
+struct PointToPlaneConfig {
+  int max_iterations = 30;
+  double max_correspondence_distance_m = 1.0;
+  double convergence_epsilon = 1e-6;  // norm of the step (m and rad)
+  // Standard deviation of a point-to-plane residual: sonar range resolution and voxel size.
+  double sigma_point_m = 0.1;
+  // Well-conditioned rule above. Used only when degeneracy_aware.
+  double max_direction_stddev = 0.01;
+  // false: plain point-to-plane ICP, stepping along every direction that is not numerically
+  // singular (the thesis's lambda_min = 0, Fig. 4.13c).
+  bool degeneracy_aware = true;
+  IcpDofs dofs = IcpDofs::kPlanar;
+  std::size_t min_points = 30;
+  std::size_t min_correspondences = 20;
+
+  Status validate() const;
+};
+
+// The target cloud must carry normals (unit, finite).
+Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config);
+
+// Thesis Alg. 6 acceptance criteria for a registration.
+struct IcpAcceptanceConfig {
+  double max_fitness_m2 = 0.05;  // criterion 2: mean squared correspondence distance
+  // Criterion 3: odometry drift rates (variance per second) along x and y; the largest plausible
+  // drift after dt seconds is sqrt(cov_x dt + cov_y dt) (thesis 4.2.1).
+  double odometry_cov_x_m2_per_s = 1e-3;
+  double odometry_cov_y_m2_per_s = 1e-3;
+
+  Status validate() const;
+};
+
+struct IcpAcceptance {
+  bool accepted = false;
+  std::string reason;  // why rejected (empty when accepted)
+  double translation_disagreement_m = 0.0;  // |(x, y) of ICP - (x, y) of odometry|
+  double drift_bound_m = 0.0;
+};
+
+// Criteria (1) converged, (2) fitness below max_fitness_m2, (3) the x-y disagreement with the odometry
+// relative pose at most the drift bound for dt_s seconds between the two submaps.
+IcpAcceptance checkIcpAcceptance(const IcpResult& result, const geometry::Pose3& T_target_source_odom, double dt_s,
+                                 const IcpAcceptanceConfig& config);
+
+}  // namespace vog::slam

@@ -1,0 +1,133 @@
+#pragma once
+// Submap pose graph (thesis 4.2, Fig. 4.4; Teixeira et al. 2016): one node per submap base pose,
+// 6-DOF (x, y, z, roll, pitch, yaw). Factors:
+//  - odometry: relative x, y, yaw between consecutive base poses (dead reckoning);
+//  - absolute: z, roll, pitch of one node (depth sensor and IMU);
+//  - loop closure: full 6-DOF relative pose from ICP, or partial (thesis Alg. 8, Eq. 4.2-4.4),
+//    constraining only the well-conditioned directions V_u; loop closures carry a robust loss so one
+//    wrong closure cannot bend the whole map.
+// Every residual is whitened by U = L^T with L L^T = Omega (see information.hpp).
+// Solved with Ceres (Levenberg-Marquardt, sparse normal Cholesky on SuiteSparse when that backend
+// is compiled in, else Eigen's sparse Cholesky; OptimizeResult::linear_solver says which).
+
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/slam/pose_vector.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace vog::slam {
+
+using NodeId = std::int64_t;
+
+enum class RobustLoss { kNone, kHuber, kCauchy };
+
+struct PoseGraphConfig {
+  RobustLoss loop_closure_loss = RobustLoss::kCauchy;
+  // Scale of the robust loss in whitened units (standard deviations): residuals beyond it are
+  // down-weighted.
+  double loop_closure_loss_scale = 1.0;
+  int max_iterations = 100;
+  double function_tolerance = 1e-10;
+  double gradient_tolerance = 1e-12;
+  double parameter_tolerance = 1e-10;
+  // Odometry and loop closures are relative in x, y, yaw: hold those of the first node added
+  // (gauge freedom). Its z, roll and pitch stay free under its absolute factor.
+  bool anchor_first_node = true;
+
+  Status validate() const;
+};
+
+// Thesis Alg. 8: a loop closure that constrains only the k well-conditioned directions (rows of
+// V_u, k x 6, orthonormal) of the relative pose x_icp = (x, y, z, roll, pitch, yaw) of `to` in
+// `from`. measurement = V_u x_icp, covariance = V_u Cov V_u^T (k x k). The factor's residual is
+// (V_u Cov V_u^T)^{-1/2} V_u (h(x_from, x_to) - x_icp) (Eq. 4.4), angles wrapped before projection.
+struct PartialLoopClosure {
+  Eigen::MatrixXd V_u;
+  Vector6d x_icp = Vector6d::Zero();
+  Eigen::VectorXd measurement;
+  Eigen::MatrixXd covariance;
+
+  int rank() const { return static_cast<int>(V_u.rows()); }
+};
+
+// Builds and checks a partial closure: V_u must have 1..6 orthonormal rows of 6 finite entries,
+// x_icp finite, and V_u Cov V_u^T positive definite.
+Result<PartialLoopClosure> makePartialLoopClosure(const Eigen::MatrixXd& V_u, const Vector6d& x_icp,
+                                                  const Matrix6d& covariance);
+
+// Planar odometry between two base poses as the odometry factor measures it: (dx, dy) of b in the
+// heading frame of a (rotated by -yaw_a), and wrap(yaw_b - yaw_a).
+Eigen::Vector3d planarOdometry(const geometry::Pose3& T_world_a, const geometry::Pose3& T_world_b);
+
+struct OptimizeResult {
+  bool converged = false;
+  int iterations = 0;
+  double initial_cost = 0.0;  // Ceres cost: 0.5 * sum of robustified squared whitened residuals
+  double final_cost = 0.0;
+  double solve_ms = 0.0;
+  std::string linear_solver;  // e.g. "SPARSE_NORMAL_CHOLESKY/SUITE_SPARSE"
+  std::string message;        // solver termination message (and any backend fallback note)
+};
+
+// Lifecycle: add nodes, then factors between existing nodes, optimize(), read poses; more nodes and
+// factors may be added afterwards and optimize() called again (warm-started from the current
+// estimates). Invariants: every stored estimate is finite; every factor references existing nodes
+// and carries a positive-definite information; a failed add or a failed optimize changes nothing.
+class PoseGraph {
+ public:
+  static Result<PoseGraph> create(const PoseGraphConfig& config = {});
+
+  Status addNode(NodeId id, const geometry::Pose3& T_world_node);
+  // (dx, dy, dyaw) as planarOdometry() computes it; information 3x3 in that order.
+  Status addOdometryFactor(NodeId from, NodeId to, const Eigen::Vector3d& dxy_dyaw,
+                           const Eigen::Matrix3d& information);
+  // Absolute (z, roll, pitch); information 3x3 in that order.
+  Status addAbsoluteFactor(NodeId id, const Eigen::Vector3d& z_roll_pitch, const Eigen::Matrix3d& information);
+  // Full 6-DOF closure: T_from_to measured; information 6x6 over (x, y, z, roll, pitch, yaw).
+  Status addLoopClosure(NodeId from, NodeId to, const geometry::Pose3& T_from_to, const Matrix6d& information);
+  Status addPartialLoopClosure(NodeId from, NodeId to, const PartialLoopClosure& closure);
+
+  Result<OptimizeResult> optimize();
+
+  bool hasNode(NodeId id) const { return nodes_.count(id) != 0; }
+  Result<geometry::Pose3> pose(NodeId id) const;
+  std::vector<NodeId> nodeIds() const;
+  std::size_t numNodes() const { return nodes_.size(); }
+  std::size_t numFactors() const { return relative_.size() + absolute_.size(); }
+  const PoseGraphConfig& config() const { return config_; }
+
+ private:
+  explicit PoseGraph(const PoseGraphConfig& config) : config_(config) {}
+  Status checkNodes(NodeId from, NodeId to, const char* what) const;
+
+  enum class RelativeKind { kOdometry, kLoopClosure };
+  // A relative factor: residual = sqrt_information * P * (h(from, to) - measurement) where P selects
+  // the constrained components (odometry: x, y, yaw of the planar relative pose; closures: V_u).
+  struct RelativeFactor {
+    RelativeKind kind;
+    NodeId from;
+    NodeId to;
+    Vector6d measurement;           // odometry: (dx, dy, 0, 0, 0, dyaw); closures: x_icp
+    Eigen::MatrixXd projection;     // k x 6
+    Eigen::MatrixXd sqrt_information;  // k x k, upper triangular
+  };
+  struct AbsoluteFactor {
+    NodeId id;
+    Eigen::Vector3d z_roll_pitch;
+    Eigen::Matrix3d sqrt_information;
+  };
+
+  PoseGraphConfig config_;
+  std::map<NodeId, Vector6d> nodes_;  // estimates, (x, y, z, roll, pitch, yaw)
+  NodeId first_node_ = 0;
+  std::vector<RelativeFactor> relative_;
+  std::vector<AbsoluteFactor> absolute_;
+};
+
+}  // namespace vog::slam

@@ -1,0 +1,386 @@
+#include "vog/slam/icp.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <nanoflann.hpp>
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+namespace vog::slam {
+namespace {
+
+struct CloudAdaptor {
+  const std::vector<Eigen::Vector3d>& points;
+  std::size_t kdtree_get_point_count() const { return points.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i](static_cast<Eigen::Index>(dim)); }
+  template <class Box>
+  bool kdtree_get_bbox(Box& /*box*/) const {
+    return false;
+  }
+};
+
+using KdTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
+                                        std::size_t>;
+
+// Nearest-neighbour index over a target cloud. Lifecycle: built once from a cloud that must outlive
+// it; read-only afterwards.
+class NearestNeighbours {
+ public:
+  // Built out of line: GCC 12 at -O3 reports a false -Wnull-dereference inside the std::vector
+  // resize that nanoflann's buildIndex() inlines here.
+  explicit NearestNeighbours(const std::vector<Eigen::Vector3d>& points);
+
+  // Index of the nearest target point and its squared distance.
+  std::pair<std::size_t, double> nearest(const Eigen::Vector3d& q) const {
+    std::size_t index = 0;
+    double dist_sq = 0.0;
+    tree_.knnSearch(q.data(), 1, &index, &dist_sq);
+    return {index, dist_sq};
+  }
+
+ private:
+  CloudAdaptor adaptor_;
+  KdTree tree_;
+};
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+[[gnu::noinline]] NearestNeighbours::NearestNeighbours(const std::vector<Eigen::Vector3d>& points)
+    : adaptor_{points}, tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {}
+#pragma GCC diagnostic pop
+
+Status checkCloud(const geometry::PointCloud& cloud, const char* which, std::size_t min_points, bool need_normals) {
+  if (cloud.size() < min_points) {
+    std::ostringstream os;
+    os << "icp: " << which << " cloud has " << cloud.size() << " points, need at least " << min_points;
+    return Error{os.str()};
+  }
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    if (!cloud.points[i].allFinite()) {
+      return Error{"icp: " + std::string(which) + " point " + std::to_string(i) + " is not finite"};
+    }
+  }
+  if (need_normals) {
+    if (!cloud.hasNormals()) return Error{"icp: " + std::string(which) + " cloud has no normals (point-to-plane needs them)"};
+    for (std::size_t i = 0; i < cloud.normals.size(); ++i) {
+      const double n = cloud.normals[i].norm();
+      if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) {
+        return Error{"icp: " + std::string(which) + " normal " + std::to_string(i) + " is not a finite unit vector"};
+      }
+    }
+  }
+  return Status::success();
+}
+
+// Derivatives of R = Rz(yaw) Ry(pitch) Rx(roll) with respect to roll, pitch, yaw.
+std::array<Eigen::Matrix3d, 3> rotationDerivatives(double roll, double pitch, double yaw) {
+  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  auto hat = [](const Eigen::Vector3d& w) {
+    Eigen::Matrix3d W;
+    W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+    return W;
+  };
+  // d/da Rk(a) = Rk(a) [e_k]x
+  return {Rz * Ry * Rx * hat(Eigen::Vector3d::UnitX()), Rz * Ry * hat(Eigen::Vector3d::UnitY()) * Rx,
+          Rz * hat(Eigen::Vector3d::UnitZ()) * Ry * Rx};
+}
+
+std::vector<int> estimatedComponents(IcpDofs dofs) {
+  if (dofs == IcpDofs::kPlanar) return {kX, kY, kYaw};
+  return {kX, kY, kZ, kRoll, kPitch, kYaw};
+}
+
+// Linearisation of the point-to-plane problem at x (thesis Alg. 7 step 5 / Alg. 8 step 4).
+struct Linearisation {
+  Eigen::MatrixXd AtA;  // m x m over the estimated components
+  Eigen::VectorXd Atb;  // m, with b = -r
+  std::size_t n = 0;
+  double sum_sq_distance = 0.0;
+};
+
+Linearisation linearisePointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                                    const NearestNeighbours& nn, const Vector6d& x, const std::vector<int>& comps,
+                                    double max_dist_m) {
+  const geometry::Pose3 T = fromXyzRpy(x);
+  const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
+  const auto m = static_cast<Eigen::Index>(comps.size());
+  Linearisation lin;
+  lin.AtA = Eigen::MatrixXd::Zero(m, m);
+  lin.Atb = Eigen::VectorXd::Zero(m);
+  const double max_dist_sq = max_dist_m * max_dist_m;
+  Eigen::Matrix<double, 1, 6> J_full;
+  Eigen::RowVectorXd J(m);
+  for (const Eigen::Vector3d& p : source.points) {
+    const Eigen::Vector3d tp = T * p;
+    const auto [idx, dist_sq] = nn.nearest(tp);
+    if (dist_sq > max_dist_sq) continue;
+    const Eigen::Vector3d& q = target.points[idx];
+    const Eigen::Vector3d& n = target.normals[idx];
+    const double r = n.dot(tp - q);
+    J_full.head<3>() = n.transpose();
+    for (int k = 0; k < 3; ++k) J_full(3 + k) = n.dot(dR[static_cast<std::size_t>(k)] * p);
+    for (Eigen::Index c = 0; c < m; ++c) J(c) = J_full(comps[static_cast<std::size_t>(c)]);
+    lin.AtA.noalias() += J.transpose() * J;
+    lin.Atb.noalias() -= J.transpose() * r;
+    lin.sum_sq_distance += dist_sq;
+    ++lin.n;
+  }
+  return lin;
+}
+
+// Fills information, covariance, V_u and eigenvalues from A^T A at the result.
+void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vector<int>& comps, double sigma,
+                      double lambda_min) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(AtA);
+  const auto m = static_cast<Eigen::Index>(comps.size());
+  out.eigenvalues = eig.eigenvalues();
+  out.information.setZero();
+  for (Eigen::Index r = 0; r < m; ++r) {
+    for (Eigen::Index c = 0; c < m; ++c) {
+      out.information(comps[static_cast<std::size_t>(r)], comps[static_cast<std::size_t>(c)]) = AtA(r, c) / (sigma * sigma);
+    }
+  }
+  std::vector<Eigen::Index> good;
+  for (Eigen::Index i = m - 1; i >= 0; --i) {  // decreasing eigenvalue
+    if (eig.eigenvalues()(i) >= lambda_min && eig.eigenvalues()(i) > 0.0) good.push_back(i);
+  }
+  out.V_u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(good.size()), 6);
+  out.eigenvalues_u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(good.size()));
+  out.covariance.setZero();
+  for (std::size_t g = 0; g < good.size(); ++g) {
+    const auto row = static_cast<Eigen::Index>(g);
+    Vector6d v = Vector6d::Zero();
+    for (Eigen::Index c = 0; c < m; ++c) v(comps[static_cast<std::size_t>(c)]) = eig.eigenvectors()(c, good[g]);
+    out.V_u.row(row) = v.transpose();
+    const double lambda = eig.eigenvalues()(good[g]);
+    out.eigenvalues_u(row) = lambda;
+    out.covariance += (sigma * sigma / lambda) * v * v.transpose();
+  }
+}
+
+}  // namespace
+
+Status PointToPoint2dConfig::validate() const {
+  std::ostringstream os;
+  if (max_iterations < 1) os << "max_iterations must be >= 1, got " << max_iterations;
+  else if (!(max_correspondence_distance_m > 0.0) || !std::isfinite(max_correspondence_distance_m))
+    os << "max_correspondence_distance_m must be finite and > 0, got " << max_correspondence_distance_m;
+  else if (!(translation_epsilon_m > 0.0)) os << "translation_epsilon_m must be > 0, got " << translation_epsilon_m;
+  else if (!(rotation_epsilon_rad > 0.0)) os << "rotation_epsilon_rad must be > 0, got " << rotation_epsilon_rad;
+  else if (!(mse_relative_epsilon >= 0.0)) os << "mse_relative_epsilon must be >= 0, got " << mse_relative_epsilon;
+  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m)) os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
+  else if (min_points < 3) os << "min_points must be >= 3, got " << min_points;
+  else if (min_correspondences < 3) os << "min_correspondences must be >= 3, got " << min_correspondences;
+  else return Status::success();
+  return Error{"point-to-point icp config: " + os.str()};
+}
+
+Status PointToPlaneConfig::validate() const {
+  std::ostringstream os;
+  if (max_iterations < 1) os << "max_iterations must be >= 1, got " << max_iterations;
+  else if (!(max_correspondence_distance_m > 0.0) || !std::isfinite(max_correspondence_distance_m))
+    os << "max_correspondence_distance_m must be finite and > 0, got " << max_correspondence_distance_m;
+  else if (!(convergence_epsilon > 0.0)) os << "convergence_epsilon must be > 0, got " << convergence_epsilon;
+  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m)) os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
+  else if (!(max_direction_stddev > 0.0) || !std::isfinite(max_direction_stddev))
+    os << "max_direction_stddev must be finite and > 0, got " << max_direction_stddev;
+  else if (min_points < 6) os << "min_points must be >= 6, got " << min_points;
+  else if (min_correspondences < 6) os << "min_correspondences must be >= 6, got " << min_correspondences;
+  else return Status::success();
+  return Error{"point-to-plane icp config: " + os.str()};
+}
+
+Status IcpAcceptanceConfig::validate() const {
+  std::ostringstream os;
+  if (!(max_fitness_m2 > 0.0) || !std::isfinite(max_fitness_m2)) os << "max_fitness_m2 must be finite and > 0, got " << max_fitness_m2;
+  else if (!(odometry_cov_x_m2_per_s >= 0.0) || !std::isfinite(odometry_cov_x_m2_per_s))
+    os << "odometry_cov_x_m2_per_s must be finite and >= 0, got " << odometry_cov_x_m2_per_s;
+  else if (!(odometry_cov_y_m2_per_s >= 0.0) || !std::isfinite(odometry_cov_y_m2_per_s))
+    os << "odometry_cov_y_m2_per_s must be finite and >= 0, got " << odometry_cov_y_m2_per_s;
+  else return Status::success();
+  return Error{"icp acceptance config: " + os.str()};
+}
+
+Result<IcpResult> icpPointToPoint2d(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                                    const geometry::Pose3& T_target_source_init, const PointToPoint2dConfig& config) {
+  if (Status s = config.validate(); !s) return s.error();
+  if (Status s = checkCloud(source, "source", config.min_points, false); !s) return s.error();
+  if (Status s = checkCloud(target, "target", config.min_points, false); !s) return s.error();
+  if (!geometry::isValidPose(T_target_source_init)) return Error{"icp: initial pose is not a finite rigid transform"};
+
+  const NearestNeighbours nn(target.points);
+  const double max_dist_sq = config.max_correspondence_distance_m * config.max_correspondence_distance_m;
+  Vector6d x = toXyzRpy(T_target_source_init);
+  IcpResult out;
+  double prev_mse = -1.0;
+  std::vector<Eigen::Vector2d> src_xy, tgt_xy;
+  for (int it = 1; it <= config.max_iterations; ++it) {
+    out.iterations = it;
+    const geometry::Pose3 T = fromXyzRpy(x);
+    src_xy.clear();
+    tgt_xy.clear();
+    double sum_sq = 0.0;
+    for (const Eigen::Vector3d& p : source.points) {
+      const Eigen::Vector3d tp = T * p;
+      const auto [idx, dist_sq] = nn.nearest(tp);
+      if (dist_sq > max_dist_sq) continue;
+      src_xy.push_back(tp.head<2>());
+      tgt_xy.push_back(target.points[idx].head<2>());
+      sum_sq += dist_sq;
+    }
+    if (src_xy.size() < config.min_correspondences) {
+      std::ostringstream os;
+      os << "icp: only " << src_xy.size() << " correspondences within " << config.max_correspondence_distance_m
+         << " m at iteration " << it << ", need " << config.min_correspondences;
+      return Error{os.str()};
+    }
+    const double mse = sum_sq / static_cast<double>(src_xy.size());
+    // Closed-form 2D rigid alignment of the correspondences (Sorkine-Hornung and Rabinovich 2017).
+    Eigen::Vector2d cs = Eigen::Vector2d::Zero(), ct = Eigen::Vector2d::Zero();
+    for (std::size_t k = 0; k < src_xy.size(); ++k) {
+      cs += src_xy[k];
+      ct += tgt_xy[k];
+    }
+    cs /= static_cast<double>(src_xy.size());
+    ct /= static_cast<double>(src_xy.size());
+    double sxx = 0.0, sxy = 0.0;  // sum of dot and cross products of centred pairs
+    for (std::size_t k = 0; k < src_xy.size(); ++k) {
+      const Eigen::Vector2d a = src_xy[k] - cs, b = tgt_xy[k] - ct;
+      sxx += a.dot(b);
+      sxy += a.x() * b.y() - a.y() * b.x();
+    }
+    const double dtheta = std::atan2(sxy, sxx);
+    const Eigen::Rotation2Dd dR(dtheta);
+    const Eigen::Vector2d dt = ct - dR * cs;
+    // T <- dT * T keeps z, roll and pitch (dT is a rotation about z plus an x-y shift).
+    x.head<2>() = dR * x.head<2>() + dt;
+    x(kYaw) = geometry::wrapAngle(x(kYaw) + dtheta);
+    const bool small_step = dt.norm() < config.translation_epsilon_m && std::abs(dtheta) < config.rotation_epsilon_rad;
+    const bool mse_settled = prev_mse >= 0.0 && std::abs(mse - prev_mse) <= config.mse_relative_epsilon * prev_mse;
+    prev_mse = mse;
+    if (small_step || mse_settled) {
+      out.converged = true;
+      break;
+    }
+  }
+  if (!x.allFinite()) return Error{"icp: estimate became non-finite"};
+  out.T_target_source = fromXyzRpy(x);
+
+  // Fitness and information at the result: point-to-point residuals in x-y, Jacobian over (x, y, yaw).
+  const geometry::Pose3 T = fromXyzRpy(x);
+  Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+  double sum_sq = 0.0;
+  std::size_t n = 0;
+  for (const Eigen::Vector3d& p : source.points) {
+    const Eigen::Vector3d tp = T * p;
+    const auto [idx, dist_sq] = nn.nearest(tp);
+    if (dist_sq > max_dist_sq) continue;
+    // d(T p)/d(x, y, yaw) for T = Trans(t) Rz(yaw) Ry Rx: the yaw derivative rotates R p = T p - t.
+    const Eigen::Vector3d rp = tp - T.translation();
+    Eigen::Matrix<double, 2, 3> J;
+    J << 1, 0, -rp.y(), 0, 1, rp.x();
+    AtA += J.transpose() * J;
+    sum_sq += dist_sq;
+    ++n;
+  }
+  if (n < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
+  out.n_correspondences = n;
+  out.fitness_m2 = sum_sq / static_cast<double>(n);
+  fillConditioning(out, AtA, {kX, kY, kYaw}, config.sigma_point_m, 0.0);
+  return out;
+}
+
+Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config) {
+  if (Status s = config.validate(); !s) return s.error();
+  if (Status s = checkCloud(source, "source", config.min_points, false); !s) return s.error();
+  if (Status s = checkCloud(target, "target", config.min_points, true); !s) return s.error();
+  if (!geometry::isValidPose(T_target_source_init)) return Error{"icp: initial pose is not a finite rigid transform"};
+
+  const NearestNeighbours nn(target.points);
+  const std::vector<int> comps = estimatedComponents(config.dofs);
+  const double lambda_wc = (config.sigma_point_m / config.max_direction_stddev) *
+                           (config.sigma_point_m / config.max_direction_stddev);
+  Vector6d x = toXyzRpy(T_target_source_init);
+  IcpResult out;
+  for (int it = 1; it <= config.max_iterations; ++it) {
+    out.iterations = it;
+    const Linearisation lin =
+        linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m);
+    if (lin.n < config.min_correspondences) {
+      std::ostringstream os;
+      os << "icp: only " << lin.n << " correspondences within " << config.max_correspondence_distance_m
+         << " m at iteration " << it << ", need " << config.min_correspondences;
+      return Error{os.str()};
+    }
+    // Thesis Alg. 7 steps 6-11: eigen-decompose A^T A; the Gauss-Newton step projected on the
+    // well-conditioned eigenvectors is sum_u v_u (v_u^T A^T b) / lambda_u (= V_f^-1 V_u dx_u of
+    // Zhang 2016 for a symmetric A^T A). Plain ICP keeps every direction that is not numerically zero.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(lin.AtA);
+    const double lambda_max = eig.eigenvalues().maxCoeff();
+    const double lambda_min = config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max;
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(lin.AtA.rows());
+    for (Eigen::Index i = 0; i < eig.eigenvalues().size(); ++i) {
+      const double lambda = eig.eigenvalues()(i);
+      if (lambda < lambda_min || !(lambda > 0.0)) continue;
+      const Eigen::VectorXd v = eig.eigenvectors().col(i);
+      step += v * (v.dot(lin.Atb) / lambda);
+    }
+    for (std::size_t c = 0; c < comps.size(); ++c) x(comps[c]) += step(static_cast<Eigen::Index>(c));
+    for (int k = kRoll; k <= kYaw; ++k) x(k) = geometry::wrapAngle(x(k));
+    if (!x.allFinite()) return Error{"icp: estimate became non-finite"};
+    if (step.norm() < config.convergence_epsilon) {
+      out.converged = true;
+      break;
+    }
+  }
+  out.T_target_source = fromXyzRpy(x);
+  // Thesis Alg. 8 step 4: linearise again at the result for V_u and the information.
+  const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m);
+  if (lin.n < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
+  out.n_correspondences = lin.n;
+  out.fitness_m2 = lin.sum_sq_distance / static_cast<double>(lin.n);
+  const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
+  fillConditioning(out, lin.AtA, comps, config.sigma_point_m,
+                   config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
+  return out;
+}
+
+IcpAcceptance checkIcpAcceptance(const IcpResult& result, const geometry::Pose3& T_target_source_odom, double dt_s,
+                                 const IcpAcceptanceConfig& config) {
+  IcpAcceptance a;
+  if (Status s = config.validate(); !s) {
+    a.reason = s.error().message;
+    return a;
+  }
+  if (!std::isfinite(dt_s)) {
+    a.reason = "time between submaps is not finite";
+    return a;
+  }
+  const double dt = std::abs(dt_s);
+  a.drift_bound_m = std::sqrt(config.odometry_cov_x_m2_per_s * dt + config.odometry_cov_y_m2_per_s * dt);
+  a.translation_disagreement_m =
+      (result.T_target_source.translation().head<2>() - T_target_source_odom.translation().head<2>()).norm();
+  std::ostringstream os;
+  if (!result.converged) {
+    os << "not converged after " << result.iterations << " iterations";
+  } else if (!(result.fitness_m2 <= config.max_fitness_m2)) {
+    os << "fitness " << result.fitness_m2 << " m^2 above " << config.max_fitness_m2;
+  } else if (!(a.translation_disagreement_m <= a.drift_bound_m)) {
+    os << "disagrees with odometry by " << a.translation_disagreement_m << " m, drift bound " << a.drift_bound_m
+       << " m";
+  } else {
+    a.accepted = true;
+    return a;
+  }
+  a.reason = os.str();
+  return a;
+}
+
+}  // namespace vog::slam

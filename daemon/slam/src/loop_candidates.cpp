@@ -1,0 +1,61 @@
+#include "vog/slam/loop_candidates.hpp"
+
+#include "vog/slam/information.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace vog::slam {
+
+Status CandidateConfig::validate() const {
+  if (min_index_gap < 1) {
+    return Error{"candidate config: min_index_gap must be >= 1, got " + std::to_string(min_index_gap)};
+  }
+  return Status::success();
+}
+
+bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b) {
+  const Eigen::Vector3d c_a = a.T_world_submap.inverse() * (b.T_world_submap * b.centroid_submap);
+  return (c_a.array() >= a.aabb_min_submap.array()).all() && (c_a.array() <= a.aabb_max_submap.array()).all();
+}
+
+Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(
+    const std::vector<SubmapFootprint>& submaps, const CandidateConfig& config) {
+  if (Status s = config.validate(); !s) return s.error();
+  for (const SubmapFootprint& s : submaps) {
+    const std::string name = "loop candidates: submap " + std::to_string(s.index);
+    if (!geometry::isValidPose(s.T_world_submap)) return Error{name + " has a non-finite or non-rigid pose"};
+    if (!s.aabb_min_submap.allFinite() || !s.aabb_max_submap.allFinite() || !s.centroid_submap.allFinite()) {
+      return Error{name + " has a non-finite bounding box or centroid"};
+    }
+    if ((s.aabb_min_submap.array() > s.aabb_max_submap.array()).any()) {
+      return Error{name + " has a bounding box with min > max"};
+    }
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t i = 0; i < submaps.size(); ++i) {
+    for (std::size_t j = i + 1; j < submaps.size(); ++j) {
+      const SubmapFootprint& a = submaps[i];
+      const SubmapFootprint& b = submaps[j];
+      if (std::llabs(a.index - b.index) < config.min_index_gap) continue;
+      if (a.n_points < config.min_points || b.n_points < config.min_points) continue;
+      if (centroidInside(a, b) || centroidInside(b, a)) pairs.emplace_back(i, j);
+    }
+  }
+  return pairs;
+}
+
+Result<double> planarMahalanobisSquared(const geometry::Pose3& T_registered, const geometry::Pose3& T_predicted,
+                                        const Eigen::Matrix3d& covariance) {
+  if (!geometry::isValidPose(T_registered) || !geometry::isValidPose(T_predicted)) {
+    return Error{"mahalanobis gate: pose is not a finite rigid transform"};
+  }
+  const auto info = informationFromCovariance(covariance, "mahalanobis gate covariance");
+  if (!info) return info.error();
+  Eigen::Vector3d d;
+  d.head<2>() = T_registered.translation().head<2>() - T_predicted.translation().head<2>();
+  d(2) = geometry::wrapAngle(geometry::yawOf(T_registered.linear()) - geometry::yawOf(T_predicted.linear()));
+  return d.dot(*info * d);
+}
+
+}  // namespace vog::slam

@@ -1,0 +1,255 @@
+// ICP (issue 4 tests 1-2): flat wall (degenerate along the wall), corner (full rank), baseline 2D
+// point-to-point with the thesis Alg. 6 acceptance checks, and bad input. Clouds are sampled on
+// planes with normals, with seeded noise.
+#include "vog/geometry/sonar.hpp"
+#include "vog/slam/icp.hpp"
+#include "vog/slam/pose_graph.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace vog::slam {
+namespace {
+
+using geometry::deg2rad;
+using geometry::PointCloud;
+using geometry::Pose3;
+
+struct Plane {
+  Eigen::Vector3d origin;
+  Eigen::Vector3d u;  // in-plane axes (unit, orthogonal)
+  Eigen::Vector3d v;
+  double u_len, v_len;
+};
+
+// Samples planes (in the target frame) on a jittered grid, range noise along the normal, normals
+// perturbed by normal_noise_rad; then expresses the cloud in the frame `T_frame_target`.
+PointCloud samplePlanes(const std::vector<Plane>& planes, const Pose3& T_frame_target, double spacing_m,
+                        double noise_m, double normal_noise_rad, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> jitter(-0.5, 0.5);
+  PointCloud cloud;
+  for (const Plane& pl : planes) {
+    const Eigen::Vector3d n = pl.u.cross(pl.v).normalized();
+    for (double a = 0.0; a <= pl.u_len; a += spacing_m) {
+      for (double b = 0.0; b <= pl.v_len; b += spacing_m) {
+        const Eigen::Vector3d p = pl.origin + (a + spacing_m * jitter(rng)) * pl.u +
+                                  (b + spacing_m * jitter(rng)) * pl.v + noise_m * g(rng) * n;
+        const Eigen::Vector3d nn =
+            (n + normal_noise_rad * Eigen::Vector3d(g(rng), g(rng), g(rng))).normalized();
+        cloud.points.push_back(T_frame_target * p);
+        cloud.normals.push_back(T_frame_target.linear() * nn);
+      }
+    }
+  }
+  return cloud;
+}
+
+// A vertical wall at x = 5 in the target frame facing the origin (normal -x), 6 m long, 2 m high.
+Plane wallX() { return {{5, -3, -3}, {0, 0, 1}, {0, 1, 0}, 2.0, 6.0}; }
+// A second wall at y = 4 (normal -y).
+Plane wallY() { return {{-1, 4, -3}, {1, 0, 0}, {0, 0, 1}, 6.0, 2.0}; }
+// The floor at z = -3.5 (normal +z).
+Plane floorZ() { return {{-1, -3, -3.5}, {1, 0, 0}, {0, 1, 0}, 6.0, 7.0}; }
+
+const Pose3 kTruth = geometry::poseFromXyzRpy(0.4, 0.8, 0.0, 0.0, 0.0, deg2rad(4.0));  // T_target_source
+
+struct WallPair {
+  PointCloud target, source;
+};
+
+WallPair makeClouds(const std::vector<Plane>& planes, double normal_noise_rad) {
+  WallPair w;
+  w.target = samplePlanes(planes, Pose3::Identity(), 0.1, 0.01, normal_noise_rad, 11);
+  w.source = samplePlanes(planes, kTruth.inverse(), 0.1, 0.01, normal_noise_rad, 12);
+  return w;
+}
+
+// Issue 4 test (1): a single flat wall.
+TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallAtOdometry) {
+  const WallPair w = makeClouds({wallX()}, 0.05);
+  Vector6d x_odom = toXyzRpy(kTruth);
+  x_odom(kX) += 0.15;          // normal offset
+  x_odom(kY) += 0.30;          // along the wall: unobservable
+  x_odom(kYaw) += deg2rad(2);  // heading
+  const Pose3 T_odom = fromXyzRpy(x_odom);
+
+  PointToPlaneConfig cfg;
+  auto degen = icpPointToPlane(w.source, w.target, T_odom, cfg);
+  ASSERT_TRUE(degen.ok()) << degen.error().message;
+  EXPECT_TRUE(degen->converged);
+  const Vector6d xd = toXyzRpy(degen->T_target_source);
+  const Vector6d xt = toXyzRpy(kTruth);
+  EXPECT_NEAR(xd(kX), xt(kX), 0.02);
+  EXPECT_NEAR(xd(kYaw), xt(kYaw), deg2rad(0.5));
+  EXPECT_NEAR(xd(kY), x_odom(kY), 0.01) << "along-wall component must stay at odometry";
+  EXPECT_NEAR(xd(kZ), x_odom(kZ), 1e-12);  // planar mode holds z, roll, pitch
+
+  // The well-conditioned basis has rank 2 and spans the normal (x) and yaw, not y.
+  ASSERT_EQ(degen->V_u.rows(), 2);
+  const Matrix6d P = degen->V_u.transpose() * degen->V_u;  // projector on span(V_u)
+  EXPECT_GT((P * Vector6d::Unit(kX)).norm(), 0.99);
+  EXPECT_GT((P * Vector6d::Unit(kYaw)).norm(), 0.99);
+  EXPECT_LT((P * Vector6d::Unit(kY)).norm(), 0.05);
+
+  // Plain point-to-plane ICP (lambda_min = 0) steps along the noise-driven along-wall direction too.
+  PointToPlaneConfig plain_cfg;
+  plain_cfg.degeneracy_aware = false;
+  auto plain = icpPointToPlane(w.source, w.target, T_odom, plain_cfg);
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  const Vector6d xp = toXyzRpy(plain->T_target_source);
+  EXPECT_GT(std::abs(xp(kY) - x_odom(kY)), 0.05) << "plain ICP y " << xp(kY) << " odometry y " << x_odom(kY);
+  EXPECT_EQ(plain->V_u.rows(), 3);  // it treats every direction as constrained
+
+  // Partial factor (thesis Alg. 8): rank 2, measurement V_u x_icp, covariance V_u Cov V_u^T.
+  auto closure = makePartialLoopClosure(degen->V_u, xd, degen->covariance);
+  ASSERT_TRUE(closure.ok()) << closure.error().message;
+  EXPECT_EQ(closure->rank(), 2);
+  EXPECT_TRUE(closure->measurement.isApprox(degen->V_u * xd));
+  const Eigen::MatrixXd expected_cov =
+      (cfg.sigma_point_m * cfg.sigma_point_m) * degen->eigenvalues_u.cwiseInverse().asDiagonal().toDenseMatrix();
+  EXPECT_TRUE(closure->covariance.isApprox(expected_cov, 1e-9));
+}
+
+// Issue 4 test (2): a corner; full rank; truth recovered within 2 cm / 0.5 deg from 0.3 m / 3 deg.
+TEST(DegeneracyAwareIcp, CornerIsFullRankAndRecoversTruth) {
+  const WallPair w = makeClouds({wallX(), wallY()}, 0.02);
+  const Vector6d xt = toXyzRpy(kTruth);
+  for (const double sign : {1.0, -1.0}) {
+    Vector6d x0 = xt;
+    x0(kX) += sign * 0.18;
+    x0(kY) -= sign * 0.24;  // |(0.18, 0.24)| = 0.3 m
+    x0(kYaw) += sign * deg2rad(3.0);
+    auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), {});
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r->converged);
+    EXPECT_EQ(r->V_u.rows(), 3);
+    EXPECT_LT(geometry::translationDistance(r->T_target_source, kTruth), 0.02);
+    EXPECT_LT(geometry::rotationAngle(r->T_target_source, kTruth), deg2rad(0.5));
+    EXPECT_LT(r->fitness_m2, 0.01);
+  }
+}
+
+TEST(DegeneracyAwareIcp, ThreePlaneCornerFullSixDof) {
+  const WallPair w = makeClouds({wallX(), wallY(), floorZ()}, 0.02);
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.15;
+  x0(kY) -= 0.15;
+  x0(kZ) += 0.15;
+  x0(kRoll) += deg2rad(1.5);
+  x0(kPitch) -= deg2rad(1.5);
+  x0(kYaw) += deg2rad(3.0);
+  PointToPlaneConfig cfg;
+  cfg.dofs = IcpDofs::kFull;
+  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), cfg);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->converged);
+  EXPECT_EQ(r->V_u.rows(), 6);
+  EXPECT_LT(geometry::translationDistance(r->T_target_source, kTruth), 0.02);
+  EXPECT_LT(geometry::rotationAngle(r->T_target_source, kTruth), deg2rad(0.5));
+}
+
+TEST(PointToPoint2dIcp, RecoversCornerAndAppliesAcceptanceChecks) {
+  // Source: the target's own samples seen from the source frame with range noise (as PCL's 2D ICP
+  // expects overlapping samplings).
+  const PointCloud target = samplePlanes({wallX(), wallY()}, Pose3::Identity(), 0.1, 0.01, 0.0, 21);
+  PointCloud source;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 0.005);
+  for (const Eigen::Vector3d& p : target.points) {
+    source.points.push_back(kTruth.inverse() * p + Eigen::Vector3d(g(rng), g(rng), g(rng)));
+  }
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.18;
+  x0(kY) += 0.24;
+  x0(kYaw) -= deg2rad(3.0);
+  const Pose3 T_odom = fromXyzRpy(x0);
+  auto r = icpPointToPoint2d(source, target, T_odom, {});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->converged);
+  EXPECT_LT(geometry::translationDistance(r->T_target_source, kTruth), 0.02);
+  EXPECT_LT(geometry::rotationAngle(r->T_target_source, kTruth), deg2rad(0.5));
+  EXPECT_LT(r->fitness_m2, 1e-3);
+
+  IcpAcceptanceConfig acc;  // 1e-3 m^2/s on x and y
+  // 0.3 m disagreement: accepted after 100 s (bound sqrt(0.2) = 0.45 m) ...
+  const IcpAcceptance ok = checkIcpAcceptance(*r, T_odom, 100.0, acc);
+  EXPECT_TRUE(ok.accepted) << ok.reason;
+  EXPECT_NEAR(ok.drift_bound_m, std::sqrt(0.2), 1e-12);
+  EXPECT_NEAR(ok.translation_disagreement_m, 0.3, 0.02);
+  // ... rejected after 10 s (bound 0.14 m): more than the odometry can have drifted.
+  const IcpAcceptance drift = checkIcpAcceptance(*r, T_odom, 10.0, acc);
+  EXPECT_FALSE(drift.accepted);
+  EXPECT_NE(drift.reason.find("drift bound"), std::string::npos) << drift.reason;
+  // Criterion 2: a fitness threshold below the achieved fitness rejects.
+  acc.max_fitness_m2 = r->fitness_m2 / 2;
+  EXPECT_FALSE(checkIcpAcceptance(*r, T_odom, 100.0, acc).accepted);
+  // Criterion 1: an unconverged run (one iteration allowed) rejects.
+  PointToPoint2dConfig one;
+  one.max_iterations = 1;
+  auto r1 = icpPointToPoint2d(source, target, T_odom, one);
+  ASSERT_TRUE(r1.ok());
+  EXPECT_FALSE(r1->converged);
+  EXPECT_FALSE(checkIcpAcceptance(*r1, T_odom, 100.0, IcpAcceptanceConfig{}).accepted);
+}
+
+TEST(Icp, BadInputIsAnErrorNeverANanPose) {
+  const WallPair w = makeClouds({wallX(), wallY()}, 0.0);
+  const Pose3 I = Pose3::Identity();
+  PointCloud empty;
+  PointCloud tiny;
+  for (int i = 0; i < 5; ++i) {
+    tiny.points.emplace_back(5.0, 0.1 * i, -2.0);
+    tiny.normals.emplace_back(-1.0, 0.0, 0.0);
+  }
+  for (const PointCloud* bad : {&empty, &tiny}) {
+    auto a = icpPointToPlane(*bad, w.target, kTruth, {});
+    ASSERT_FALSE(a.ok());
+    EXPECT_NE(a.error().message.find("source cloud has"), std::string::npos) << a.error().message;
+    EXPECT_FALSE(icpPointToPlane(w.source, *bad, kTruth, {}).ok());
+    EXPECT_FALSE(icpPointToPoint2d(*bad, w.target, kTruth, {}).ok());
+    EXPECT_FALSE(icpPointToPoint2d(w.source, *bad, kTruth, {}).ok());
+  }
+  PointCloud no_normals = w.target;
+  no_normals.normals.clear();
+  auto nn = icpPointToPlane(w.source, no_normals, kTruth, {});
+  ASSERT_FALSE(nn.ok());
+  EXPECT_NE(nn.error().message.find("normals"), std::string::npos);
+  PointCloud nan_cloud = w.source;
+  nan_cloud.points[17].y() = std::numeric_limits<double>::quiet_NaN();
+  auto np = icpPointToPlane(nan_cloud, w.target, kTruth, {});
+  ASSERT_FALSE(np.ok());
+  EXPECT_NE(np.error().message.find("point 17"), std::string::npos) << np.error().message;
+  EXPECT_FALSE(icpPointToPoint2d(nan_cloud, w.target, kTruth, {}).ok());
+  // Clouds 50 m apart: no correspondences, an error rather than a guess.
+  const Pose3 far = geometry::poseFromXyzRpy(50, 0, 0, 0, 0, 0);
+  auto f = icpPointToPlane(w.source, w.target, far, {});
+  ASSERT_FALSE(f.ok());
+  EXPECT_NE(f.error().message.find("correspondences"), std::string::npos);
+  EXPECT_FALSE(icpPointToPoint2d(w.source, w.target, far, {}).ok());
+  Pose3 nan_pose = I;
+  nan_pose.translation().z() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(icpPointToPlane(w.source, w.target, nan_pose, {}).ok());
+  PointToPlaneConfig bad_cfg;
+  bad_cfg.sigma_point_m = 0.0;
+  auto bc = icpPointToPlane(w.source, w.target, kTruth, bad_cfg);
+  ASSERT_FALSE(bc.ok());
+  EXPECT_NE(bc.error().message.find("sigma_point_m"), std::string::npos);
+  // A cloud of points all at one spot: every direction is degenerate; the estimate stays finite.
+  PointCloud blob;
+  for (int i = 0; i < 50; ++i) {
+    blob.points.emplace_back(5.0, 0.0, -2.0);
+    blob.normals.emplace_back(-1.0, 0.0, 0.0);
+  }
+  auto b = icpPointToPlane(blob, blob, I, {});
+  ASSERT_TRUE(b.ok()) << b.error().message;
+  EXPECT_TRUE(geometry::isValidPose(b->T_target_source));
+  EXPECT_LE(b->V_u.rows(), 1);
+}
+
+}  // namespace
+}  // namespace vog::slam

@@ -1,0 +1,81 @@
+// Loop-closure candidate gate (thesis Alg. 6 lines 4-8) and the Mahalanobis gate.
+#include "vog/slam/loop_candidates.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <numbers>
+
+namespace vog::slam {
+namespace {
+
+SubmapFootprint footprint(std::int64_t index, const geometry::Pose3& T_world_submap) {
+  SubmapFootprint s;
+  s.index = index;
+  s.T_world_submap = T_world_submap;
+  s.aabb_min_submap = Eigen::Vector3d(2, -3, -4);  // cloud ahead of the base pose
+  s.aabb_max_submap = Eigen::Vector3d(8, 3, 0);
+  s.centroid_submap = Eigen::Vector3d(5, 0, -2);
+  s.n_points = 500;
+  return s;
+}
+
+TEST(LoopCandidates, CentroidInsideOtherBoxUnderCurrentPoses) {
+  std::vector<SubmapFootprint> maps;
+  maps.push_back(footprint(0, geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0)));
+  maps.push_back(footprint(1, geometry::poseFromXyzRpy(0.5, 0, 0, 0, 0, 0)));   // consecutive: skipped
+  maps.push_back(footprint(2, geometry::poseFromXyzRpy(20, 0, 0, 0, 0, 0)));    // far away
+  maps.push_back(footprint(3, geometry::poseFromXyzRpy(1.0, 1.0, 0, 0, 0, 0.2)));  // overlaps 0, 1
+  // Seen from the far side, facing back, with its centroid near the far end of its box: the centroid
+  // lands at world (1, 0), outside 0's box (x >= 2), while 0's centroid (5, 0) maps to (5, 0) in its
+  // frame: inside. Either direction suffices.
+  maps.push_back(footprint(5, geometry::poseFromXyzRpy(10, 0, 0, 0, 0, std::numbers::pi)));
+  maps.back().centroid_submap = Eigen::Vector3d(9, 0, -2);
+  auto pairs = findLoopCandidates(maps);
+  ASSERT_TRUE(pairs.ok()) << pairs.error().message;
+  const std::vector<std::pair<std::size_t, std::size_t>> expected{{0, 3}, {0, 4}, {1, 3}, {1, 4}, {3, 4}};
+  EXPECT_EQ(*pairs, expected);
+  EXPECT_FALSE(centroidInside(maps[0], maps[4]));
+  EXPECT_TRUE(centroidInside(maps[4], maps[0]));
+
+  // The same pair is not a candidate when its current pose estimate moves it away.
+  maps[3].T_world_submap = geometry::poseFromXyzRpy(1.0, 9.0, 0, 0, 0, 0.2);
+  auto moved = findLoopCandidates(maps);
+  ASSERT_TRUE(moved.ok());
+  EXPECT_EQ(std::count(moved->begin(), moved->end(), std::pair<std::size_t, std::size_t>{0, 3}), 0);
+
+  // Too few points (Alg. 6 line 4).
+  maps[4].n_points = 3;
+  auto sparse = findLoopCandidates(maps);
+  ASSERT_TRUE(sparse.ok());
+  for (const auto& p : *sparse) EXPECT_NE(p.second, 4u);
+}
+
+TEST(LoopCandidates, BadInputNamed) {
+  std::vector<SubmapFootprint> maps{footprint(0, geometry::Pose3::Identity()), footprint(7, geometry::Pose3::Identity())};
+  maps[1].aabb_min_submap.x() = 9.0;  // min > max
+  auto r = findLoopCandidates(maps);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("submap 7"), std::string::npos) << r.error().message;
+  maps[1] = footprint(7, geometry::Pose3::Identity());
+  maps[1].centroid_submap.z() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(findLoopCandidates(maps).ok());
+  CandidateConfig bad;
+  bad.min_index_gap = 0;
+  EXPECT_FALSE(findLoopCandidates({}, bad).ok());
+}
+
+TEST(MahalanobisGate, DistanceUnderCovariance) {
+  const geometry::Pose3 pred = geometry::poseFromXyzRpy(1, 2, 0, 0, 0, 3.1);
+  const geometry::Pose3 reg = geometry::poseFromXyzRpy(1.2, 2, 0.5, 0, 0, -3.1);  // yaw wraps: 0.083 rad apart
+  const Eigen::Matrix3d cov = Eigen::Vector3d(0.01, 0.04, 0.0025).asDiagonal();
+  auto d2 = planarMahalanobisSquared(reg, pred, cov);
+  ASSERT_TRUE(d2.ok());
+  const double dyaw = 2 * std::numbers::pi - 6.2;
+  EXPECT_NEAR(*d2, 0.04 / 0.01 + dyaw * dyaw / 0.0025, 1e-9);
+  EXPECT_FALSE(planarMahalanobisSquared(reg, pred, Eigen::Matrix3d::Zero()).ok());
+}
+
+}  // namespace
+}  // namespace vog::slam

@@ -1,0 +1,317 @@
+// Vehicle pose graph (issue 4): odometry / absolute / loop-closure factors, robust loss against
+// outlier closures, partial factors, and bad input.
+#include "vog/slam/pose_graph.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+namespace vog::slam {
+namespace {
+
+using geometry::Pose3;
+
+constexpr double kSigmaXy = 0.05, kSigmaYaw = 0.01, kSigmaZ = 0.02, kSigmaRp = 0.005;
+
+// Two laps of a circle (so node k and k + n/2 revisit the same place), depth and attitude varying
+// slightly, as a hover-capable vehicle would fly around a structure.
+std::vector<Pose3> circleTruth(int n) {
+  std::vector<Pose3> truth;
+  for (int i = 0; i < n; ++i) {
+    const double a = 4.0 * std::numbers::pi * i / n;
+    truth.push_back(geometry::poseFromXyzRpy(6.0 * std::cos(a), 6.0 * std::sin(a), -2.0 + 0.3 * std::sin(3 * a),
+                                             0.02 * std::sin(a), 0.01 * std::cos(a), a + std::numbers::pi / 2));
+  }
+  return truth;
+}
+
+Eigen::Matrix3d odometryInformation() {
+  Eigen::Matrix3d cov;
+  cov << kSigmaXy * kSigmaXy, 0.3 * kSigmaXy * kSigmaXy, 0.0, 0.3 * kSigmaXy * kSigmaXy, kSigmaXy * kSigmaXy, 0.0, 0.0,
+      0.0, kSigmaYaw * kSigmaYaw;  // correlated x-y noise: a non-diagonal information
+  return cov.inverse();
+}
+
+Matrix6d closureInformation() {
+  Vector6d sigma;
+  sigma << 0.05, 0.05, 0.05, 0.01, 0.01, 0.01;
+  return sigma.cwiseInverse().cwiseAbs2().asDiagonal();
+}
+
+struct Scenario {
+  std::vector<Pose3> truth;
+  std::vector<Pose3> dead_reckoning;
+  std::vector<Eigen::Vector3d> odometry;
+  std::vector<Eigen::Vector3d> absolute;
+};
+
+Scenario makeScenario(unsigned seed, int n) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Scenario s;
+  s.truth = circleTruth(n);
+  const Eigen::LLT<Eigen::Matrix3d> odo_cov(odometryInformation().inverse());
+  for (int i = 0; i + 1 < n; ++i) {
+    const Eigen::Vector3d w(g(rng), g(rng), g(rng));
+    s.odometry.push_back(planarOdometry(s.truth[static_cast<std::size_t>(i)], s.truth[static_cast<std::size_t>(i) + 1]) +
+                         odo_cov.matrixL() * w);
+  }
+  for (int i = 0; i < n; ++i) {
+    const Vector6d x = toXyzRpy(s.truth[static_cast<std::size_t>(i)]);
+    s.absolute.emplace_back(x(kZ) + kSigmaZ * g(rng), x(kRoll) + kSigmaRp * g(rng), x(kPitch) + kSigmaRp * g(rng));
+  }
+  // Dead reckoning: compose the planar odometry; z, roll, pitch from the absolute sensors.
+  Vector6d x = toXyzRpy(s.truth[0]);
+  x(kZ) = s.absolute[0](0);
+  x(kRoll) = s.absolute[0](1);
+  x(kPitch) = s.absolute[0](2);
+  s.dead_reckoning.push_back(fromXyzRpy(x));
+  for (int i = 0; i + 1 < n; ++i) {
+    const Eigen::Vector3d& o = s.odometry[static_cast<std::size_t>(i)];
+    const double c = std::cos(x(kYaw)), sn = std::sin(x(kYaw));
+    x(kX) += c * o(0) - sn * o(1);
+    x(kY) += sn * o(0) + c * o(1);
+    x(kYaw) = geometry::wrapAngle(x(kYaw) + o(2));
+    const Eigen::Vector3d& a = s.absolute[static_cast<std::size_t>(i) + 1];
+    x(kZ) = a(0);
+    x(kRoll) = a(1);
+    x(kPitch) = a(2);
+    s.dead_reckoning.push_back(fromXyzRpy(x));
+  }
+  return s;
+}
+
+PoseGraph buildGraph(const Scenario& s, const PoseGraphConfig& config) {
+  auto graph = PoseGraph::create(config);
+  EXPECT_TRUE(graph.ok());
+  PoseGraph g = std::move(*graph);
+  const Eigen::Matrix3d abs_info = Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp),
+                                                   1 / (kSigmaRp * kSigmaRp)).asDiagonal();
+  for (std::size_t i = 0; i < s.truth.size(); ++i) {
+    EXPECT_TRUE(g.addNode(static_cast<NodeId>(i), s.dead_reckoning[i]).ok());
+    EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], abs_info).ok());
+    if (i > 0) {
+      EXPECT_TRUE(g.addOdometryFactor(static_cast<NodeId>(i - 1), static_cast<NodeId>(i), s.odometry[i - 1],
+                                      odometryInformation())
+                      .ok());
+    }
+  }
+  return g;
+}
+
+void addTrueClosures(PoseGraph& g, const Scenario& s, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const std::size_t half = s.truth.size() / 2;
+  for (std::size_t i = 0; i < half; i += 4) {
+    Vector6d x = toXyzRpy(s.truth[i].inverse() * s.truth[i + half]);
+    Vector6d noise;
+    noise << 0.05 * n(rng), 0.05 * n(rng), 0.05 * n(rng), 0.01 * n(rng), 0.01 * n(rng), 0.01 * n(rng);
+    ASSERT_TRUE(g.addLoopClosure(static_cast<NodeId>(i), static_cast<NodeId>(i + half), fromXyzRpy(x + noise),
+                                 closureInformation())
+                    .ok());
+  }
+}
+
+double meanTranslationError(const PoseGraph& g, const std::vector<Pose3>& truth) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    auto p = g.pose(static_cast<NodeId>(i));
+    EXPECT_TRUE(p.ok());
+    EXPECT_TRUE(geometry::isValidPose(*p));
+    sum += geometry::translationDistance(*p, truth[i]);
+  }
+  return sum / static_cast<double>(truth.size());
+}
+
+double meanTranslationError(const std::vector<Pose3>& est, const std::vector<Pose3>& truth) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < truth.size(); ++i) sum += geometry::translationDistance(est[i], truth[i]);
+  return sum / static_cast<double>(truth.size());
+}
+
+TEST(PlanarOdometry, MeasuresInHeadingFrame) {
+  const Pose3 a = geometry::poseFromXyzRpy(1, 2, -3, 0.1, 0.05, std::numbers::pi / 2);
+  const Pose3 b = geometry::poseFromXyzRpy(1, 4, -1, 0.0, 0.0, std::numbers::pi / 2 + 0.2);
+  const Eigen::Vector3d o = planarOdometry(a, b);
+  EXPECT_NEAR(o(0), 2.0, 1e-12);  // forward along a's heading (+y in the world)
+  EXPECT_NEAR(o(1), 0.0, 1e-12);
+  EXPECT_NEAR(o(2), 0.2, 1e-12);
+}
+
+TEST(PoseGraph, OdometryOnlyOptimumIsDeadReckoning) {
+  const Scenario s = makeScenario(1, 40);
+  PoseGraph g = buildGraph(s, {});
+  auto r = g.optimize();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->converged) << r->message;
+  EXPECT_EQ(r->linear_solver, "SPARSE_NORMAL_CHOLESKY/SUITE_SPARSE") << r->message;
+  // A tree of factors is satisfied exactly: the estimate stays at dead reckoning, cost ~ 0.
+  EXPECT_LT(r->final_cost, 1e-12);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) {
+    EXPECT_LT(geometry::translationDistance(*g.pose(static_cast<NodeId>(i)), s.dead_reckoning[i]), 1e-6) << i;
+  }
+}
+
+TEST(PoseGraph, LoopClosuresCorrectDrift) {
+  const Scenario s = makeScenario(2, 40);
+  PoseGraph g = buildGraph(s, {});
+  addTrueClosures(g, s, 20);
+  const double before = meanTranslationError(s.dead_reckoning, s.truth);
+  auto r = g.optimize();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->converged) << r->message;
+  EXPECT_LT(r->final_cost, r->initial_cost);
+  const double after = meanTranslationError(g, s.truth);
+  EXPECT_LT(after, 0.5 * before) << "before " << before << " after " << after;
+  // The anchor node keeps its x, y, yaw.
+  const Vector6d x0 = toXyzRpy(*g.pose(0));
+  EXPECT_NEAR(x0(kX), toXyzRpy(s.truth[0])(kX), 1e-12);
+  EXPECT_NEAR(x0(kYaw), toXyzRpy(s.truth[0])(kYaw), 1e-12);
+}
+
+// Issue 4 test (3): random wrong closures are down-weighted by the robust loss.
+TEST(PoseGraph, OutlierClosuresDownWeightedByCauchyLoss) {
+  const Scenario s = makeScenario(3, 40);
+  auto addOutliers = [&](PoseGraph& g) {
+    std::mt19937 rng(99);
+    std::uniform_int_distribution<int> node(0, 39);
+    std::uniform_real_distribution<double> offset(-5.0, 5.0), yaw(-1.0, 1.0);
+    int added = 0;
+    while (added < 6) {
+      const int i = node(rng), j = node(rng);
+      if (std::abs(i - j) < 3) continue;
+      ASSERT_TRUE(g.addLoopClosure(i, j, geometry::poseFromXyzRpy(offset(rng), offset(rng), 0, 0, 0, yaw(rng)),
+                                   closureInformation())
+                      .ok());
+      ++added;
+    }
+  };
+  PoseGraph clean = buildGraph(s, {});
+  addTrueClosures(clean, s, 30);
+  ASSERT_TRUE(clean.optimize().ok());
+  const double err_clean = meanTranslationError(clean, s.truth);
+
+  PoseGraph robust = buildGraph(s, {});
+  addTrueClosures(robust, s, 30);
+  addOutliers(robust);
+  auto r = robust.optimize();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const double err_robust = meanTranslationError(robust, s.truth);
+
+  PoseGraphConfig plain_config;
+  plain_config.loop_closure_loss = RobustLoss::kNone;
+  PoseGraph plain = buildGraph(s, plain_config);
+  addTrueClosures(plain, s, 30);
+  addOutliers(plain);
+  ASSERT_TRUE(plain.optimize().ok());
+  const double err_plain = meanTranslationError(plain, s.truth);
+
+  EXPECT_LT(err_robust, 1.5 * err_clean + 0.02) << "clean " << err_clean << " robust " << err_robust;
+  // Without the robust loss the same outliers bend the map (the test would catch a missing loss).
+  EXPECT_GT(err_plain, 5.0 * err_robust) << "plain " << err_plain << " robust " << err_robust;
+}
+
+// Thesis Alg. 8 / Eq. 4.2-4.4: a partial closure moves only the constrained directions.
+TEST(PoseGraph, PartialClosureConstrainsOnlyItsDirections) {
+  auto graph = PoseGraph::create();
+  ASSERT_TRUE(graph.ok());
+  PoseGraph g = std::move(*graph);
+  const Pose3 T0 = geometry::poseFromXyzRpy(0, 0, -2, 0, 0, 0);
+  const Pose3 T1_odom = geometry::poseFromXyzRpy(3.0, 1.0, -2, 0, 0, 0.1);
+  ASSERT_TRUE(g.addNode(0, T0).ok());
+  ASSERT_TRUE(g.addNode(1, T1_odom).ok());
+  const Eigen::Matrix3d weak = Eigen::Vector3d(1.0, 1.0, 1.0).asDiagonal();  // 1 m / 1 rad odometry
+  ASSERT_TRUE(g.addOdometryFactor(0, 1, planarOdometry(T0, T1_odom), weak).ok());
+  const Eigen::Matrix3d abs_info = Eigen::Matrix3d::Identity() * 1e4;
+  ASSERT_TRUE(g.addAbsoluteFactor(0, Eigen::Vector3d(-2, 0, 0), abs_info).ok());
+  ASSERT_TRUE(g.addAbsoluteFactor(1, Eigen::Vector3d(-2, 0, 0), abs_info).ok());
+
+  // ICP says x = 3.4 and yaw = 0.05 (a wall facing x); y from ICP (5.0) is meaningless and excluded.
+  Vector6d x_icp;
+  x_icp << 3.4, 5.0, 0.0, 0.0, 0.0, 0.05;
+  Eigen::MatrixXd V_u = Eigen::MatrixXd::Zero(2, 6);
+  V_u(0, kX) = 1.0;
+  V_u(1, kYaw) = 1.0;
+  Matrix6d cov = Matrix6d::Identity() * 1e-6;
+  auto closure = makePartialLoopClosure(V_u, x_icp, cov);
+  ASSERT_TRUE(closure.ok()) << closure.error().message;
+  EXPECT_EQ(closure->rank(), 2);
+  EXPECT_NEAR(closure->measurement(0), 3.4, 1e-12);
+  EXPECT_NEAR(closure->measurement(1), 0.05, 1e-12);
+  ASSERT_TRUE(g.addPartialLoopClosure(0, 1, *closure).ok());
+  auto r = g.optimize();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const Vector6d x1 = toXyzRpy(*g.pose(1));
+  // Relative pose of 1 in 0 (node 0 anchored at identity yaw): x and yaw follow the closure ...
+  EXPECT_NEAR(x1(kX), 3.4, 1e-3);
+  EXPECT_NEAR(x1(kYaw), 0.05, 1e-4);
+  // ... and y stays at its odometry value (node 0 is anchored at yaw 0, so the odometry's heading
+  // frame is the world frame), far from the excluded ICP value 5.0.
+  EXPECT_NEAR(x1(kY), 1.0, 1e-3);
+}
+
+TEST(PoseGraph, BadInputRejectedAndGraphUnchanged) {
+  auto bad_config = PoseGraphConfig{};
+  bad_config.loop_closure_loss_scale = -1.0;
+  auto c = PoseGraph::create(bad_config);
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("loop_closure_loss_scale"), std::string::npos);
+
+  PoseGraph g = std::move(*PoseGraph::create());
+  ASSERT_TRUE(g.optimize().ok() == false);  // no nodes
+  ASSERT_TRUE(g.addNode(0, Pose3::Identity()).ok());
+  ASSERT_TRUE(g.addNode(1, geometry::poseFromXyzRpy(1, 0, 0, 0, 0, 0)).ok());
+  EXPECT_FALSE(g.addNode(1, Pose3::Identity()).ok());  // duplicate
+  Pose3 nan_pose = Pose3::Identity();
+  nan_pose.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(g.addNode(2, nan_pose).ok());
+
+  const auto missing = g.addOdometryFactor(0, 7, Eigen::Vector3d(1, 0, 0), Eigen::Matrix3d::Identity());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("missing node 7"), std::string::npos) << missing.error().message;
+  Eigen::Matrix3d singular = Eigen::Matrix3d::Identity();
+  singular(2, 2) = 0.0;
+  EXPECT_FALSE(g.addOdometryFactor(0, 1, Eigen::Vector3d(1, 0, 0), singular).ok());
+  Eigen::Matrix3d nan_info = Eigen::Matrix3d::Identity();
+  nan_info(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(g.addOdometryFactor(0, 1, Eigen::Vector3d(1, 0, 0), nan_info).ok());
+  EXPECT_FALSE(g.addOdometryFactor(0, 1, Eigen::Vector3d(std::nan(""), 0, 0), Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(g.addAbsoluteFactor(9, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(g.addLoopClosure(0, 0, Pose3::Identity(), Matrix6d::Identity()).ok());  // self loop
+  Matrix6d nan6 = Matrix6d::Identity();
+  nan6(3, 4) = nan6(4, 3) = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(g.addLoopClosure(0, 1, Pose3::Identity(), nan6).ok());
+  EXPECT_FALSE(g.addLoopClosure(0, 1, Pose3::Identity(), Matrix6d::Zero()).ok());
+  EXPECT_EQ(g.numFactors(), 0u);
+
+  // Partial closures: non-orthonormal V_u, singular projected covariance, wrong shapes.
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(2, 6);
+  V(0, 0) = 1.0;
+  V(1, 0) = 1.0;
+  EXPECT_FALSE(makePartialLoopClosure(V, Vector6d::Zero(), Matrix6d::Identity()).ok());
+  V(1, 0) = 0.0;
+  V(1, 5) = 1.0;
+  Matrix6d cov_singular = Matrix6d::Identity();
+  cov_singular(5, 5) = 0.0;
+  auto p = makePartialLoopClosure(V, Vector6d::Zero(), cov_singular);
+  ASSERT_FALSE(p.ok());
+  EXPECT_NE(p.error().message.find("V_u Cov V_u^T"), std::string::npos) << p.error().message;
+  EXPECT_FALSE(makePartialLoopClosure(Eigen::MatrixXd::Zero(0, 6), Vector6d::Zero(), Matrix6d::Identity()).ok());
+  auto good = makePartialLoopClosure(V, Vector6d::Zero(), Matrix6d::Identity());
+  ASSERT_TRUE(good.ok());
+  EXPECT_FALSE(g.addPartialLoopClosure(0, 5, *good).ok());
+  PartialLoopClosure tampered = *good;
+  tampered.covariance(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(g.addPartialLoopClosure(0, 1, tampered).ok());
+  EXPECT_EQ(g.numFactors(), 0u);
+  EXPECT_FALSE(g.optimize().ok());  // no factors
+  EXPECT_TRUE(g.pose(0).ok());
+  EXPECT_FALSE(g.pose(42).ok());
+}
+
+}  // namespace
+}  // namespace vog::slam
