@@ -1,0 +1,48 @@
+#pragma once
+// Merged map <-> vog.v1.MapDelta (proto/vog/v1/map.proto): the server side encodes the blocks changed
+// since a client's version; the client side (`MapMirror`) applies deltas to its copy.
+
+#include "vog/geometry/result.hpp"
+#include "vog/map/merged_map.hpp"
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <tuple>
+
+namespace vog::v1 {
+class MapDelta;
+}
+
+namespace vog::api {
+
+// Everything changed after `since_version` (0 = the whole map) in `snapshot`.
+v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_version);
+
+// A client's copy of the merged map, kept up to date from deltas.
+// Lifecycle: empty at version 0; each applied delta must start at the mirror's version.
+class MapMirror {
+ public:
+  struct Block {
+    std::array<float, map::MergedMap::kBlockVoxels> log_odds{};
+    std::array<bool, map::MergedMap::kBlockVoxels> known{};
+  };
+
+  // Rejects (and ignores) a delta that does not start at this mirror's version, has another
+  // resolution than earlier deltas, or carries malformed blocks.
+  Status apply(const v1::MapDelta& delta);
+
+  std::uint64_t version() const { return version_; }
+  double resolution() const { return resolution_m_; }
+  std::size_t blockCount() const { return blocks_.size(); }
+  // Clamped log-odds and status of a voxel key.
+  map::VoxelValue at(const map::VoxelKey& key) const;
+
+ private:
+  std::map<std::tuple<int, int, int>, Block> blocks_;
+  std::uint64_t version_ = 0;
+  double resolution_m_ = 0.0;
+  map::LogOddsBounds bounds_;
+};
+
+}  // namespace vog::api
