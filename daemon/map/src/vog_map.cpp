@@ -2,7 +2,6 @@
 
 #include <octomap/OcTree.h>
 
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <mutex>
@@ -24,6 +23,12 @@ Status checkCompatible(const GridConfig& a, const GridConfig& b) {
     return Error{"submap clamping or occupancy threshold differs from the map's"};
   }
   return {};
+}
+
+std::string submapFileName(SubmapId id) {
+  std::ostringstream name;
+  name << "submap_" << std::setw(6) << std::setfill('0') << id << ".ot";
+  return name.str();
 }
 
 }  // namespace
@@ -200,9 +205,7 @@ Status VogMap::save(const std::filesystem::path& dir) const {
   std::ofstream poses(dir / "poses.txt");
   poses << "# id x y z qx qy qz qw (T_world_submap)\n" << std::setprecision(17);
   for (const auto& e : entries) {
-    char name[32];
-    std::snprintf(name, sizeof name, "submap_%06u.ot", e.id);
-    if (auto s = e.grid->save(dir / name); !s) return s;
+    if (auto s = e.grid->save(dir / submapFileName(e.id)); !s) return s;
     const Eigen::Quaterniond q(e.T_world_submap.linear());
     const Eigen::Vector3d t = e.T_world_submap.translation();
     poses << e.id << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z()
@@ -257,9 +260,7 @@ Result<std::unique_ptr<VogMap>> VogMap::load(const std::filesystem::path& dir) {
     geometry::Pose3 T = geometry::Pose3::Identity();
     T.linear() = q.normalized().toRotationMatrix();
     T.translation() = Eigen::Vector3d(x, y, z);
-    char name[32];
-    std::snprintf(name, sizeof name, "submap_%06u.ot", id);
-    auto grid = LocalGrid::load(config, dir / name);
+    auto grid = LocalGrid::load(config, dir / submapFileName(id));
     if (!grid) return grid.error();
     if (auto s = (*map)->addSubmap(id, std::move(*grid), T); !s) return s.error();
   }

@@ -70,7 +70,7 @@ WallPair makeClouds(const std::vector<Plane>& planes, double normal_noise_rad) {
 }
 
 // Issue 4 test (1): a single flat wall.
-TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallAtOdometry) {
+TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry) {
   const WallPair w = makeClouds({wallX()}, 0.05);
   Vector6d x_odom = toXyzRpy(kTruth);
   x_odom(kX) += 0.15;          // normal offset
