@@ -1,0 +1,142 @@
+#include "vog/io/tcp_client.hpp"
+
+#include <deque>
+#include <vector>
+
+#include "supervisor.hpp"
+
+namespace vog::io {
+
+Status TcpClientConfig::validate(const std::string& prefix) const {
+  std::error_code ec;
+  asio::ip::make_address(address, ec);
+  if (ec) return Error{prefix + ".address '" + address + "' is not a numeric IP address"};
+  if (port == 0) return Error{prefix + ".port must be set (got 0)"};
+  if (connect_timeout_ms < 1 || connect_timeout_ms > 600000) {
+    return Error{prefix + ".connect_timeout_ms must be in [1, 600000], got " + std::to_string(connect_timeout_ms)};
+  }
+  if (read_chunk_bytes < 1 || read_chunk_bytes > (1u << 20)) {
+    return Error{prefix + ".read_chunk_bytes must be in [1, 1048576], got " + std::to_string(read_chunk_bytes)};
+  }
+  return reconnect.validate(prefix + ".reconnect");
+}
+
+class TcpClient::Impl final : public detail::Supervisor {
+ public:
+  Impl(asio::io_context& io, TcpClientConfig config, StampClock clock, ByteHandler on_bytes, StateHandler on_state)
+      : Supervisor(io, config.reconnect, std::move(clock), std::move(on_state)),
+        config_(std::move(config)),
+        on_bytes_(std::move(on_bytes)),
+        socket_(io),
+        connect_timer_(io),
+        buffer_(config_.read_chunk_bytes) {}
+
+  const TcpClientConfig& config() const { return config_; }
+
+  Status write(std::span<const std::uint8_t> bytes) {
+    if (!connected()) return Error{"tcp " + endpointText() + ": not connected (" + health().reason + ")"};
+    queue_.emplace_back(bytes.begin(), bytes.end());
+    if (queue_.size() == 1) writeNext(generation());
+    return Status::success();
+  }
+
+ protected:
+  void asyncOpen(OpenDone done) override {
+    queue_.clear();
+    const asio::ip::tcp::endpoint ep(asio::ip::make_address(config_.address), config_.port);
+    const std::uint64_t gen = generation();
+    auto self = std::static_pointer_cast<Impl>(shared_from_this());
+    connect_timer_.expires_after(std::chrono::milliseconds(config_.connect_timeout_ms));
+    connect_timer_.async_wait([self, gen](const std::error_code& ec) {
+      if (!ec && self->isCurrent(gen)) {
+        std::error_code ignored;
+        self->socket_.close(ignored);  // completes the connect with operation_aborted
+        self->timed_out_ = true;
+      }
+    });
+    timed_out_ = false;
+    socket_.async_connect(ep, [self, gen, done = std::move(done)](const std::error_code& ec) {
+      if (!self->isCurrent(gen)) return;
+      self->connect_timer_.cancel();
+      if (ec) {
+        done(Error{"tcp connect " + self->endpointText() + ": " +
+                   (self->timed_out_ ? std::string("timed out") : ec.message())});
+        return;
+      }
+      std::error_code ignored;
+      self->socket_.set_option(asio::ip::tcp::no_delay(true), ignored);
+      done(Status::success());
+    });
+  }
+
+  void onOpened() override { readNext(generation()); }
+
+  void closeLink() override {
+    std::error_code ignored;
+    connect_timer_.cancel();
+    socket_.close(ignored);
+    // queue_ is cleared on the next open, not here: a cancelled write may still hold its buffer.
+  }
+
+ private:
+  std::string endpointText() const { return config_.address + ":" + std::to_string(config_.port); }
+
+  void readNext(std::uint64_t gen) {
+    socket_.async_read_some(asio::buffer(buffer_), [self = std::static_pointer_cast<Impl>(shared_from_this()), gen](
+                                                       const std::error_code& ec, std::size_t n) {
+      if (!self->isCurrent(gen)) return;
+      if (ec) {
+        self->linkLost("tcp " + self->endpointText() + " read: " +
+                       (ec == asio::error::eof ? std::string("connection closed by peer") : ec.message()));
+        return;
+      }
+      const std::int64_t stamp_ns = self->now_ns();
+      self->noteRx(n, 0, stamp_ns);
+      if (self->on_bytes_) self->on_bytes_(std::span<const std::uint8_t>(self->buffer_.data(), n), stamp_ns);
+      if (self->isCurrent(gen)) self->readNext(gen);
+    });
+  }
+
+  void writeNext(std::uint64_t gen) {
+    asio::async_write(socket_, asio::buffer(queue_.front()),
+                      [self = std::static_pointer_cast<Impl>(shared_from_this()), gen](const std::error_code& ec,
+                                                                                        std::size_t n) {
+                        if (!self->isCurrent(gen)) return;
+                        if (ec) {
+                          self->linkLost("tcp " + self->endpointText() + " write: " + ec.message());
+                          return;
+                        }
+                        self->noteTx(n, 0);
+                        self->queue_.pop_front();
+                        if (!self->queue_.empty()) self->writeNext(gen);
+                      });
+  }
+
+  TcpClientConfig config_;
+  ByteHandler on_bytes_;
+  asio::ip::tcp::socket socket_;
+  asio::steady_timer connect_timer_;
+  bool timed_out_ = false;
+  std::vector<std::uint8_t> buffer_;
+  std::deque<std::vector<std::uint8_t>> queue_;
+};
+
+TcpClient::TcpClient(asio::io_context& io, TcpClientConfig config, StampClock clock, ByteHandler on_bytes,
+                     StateHandler on_state)
+    : impl_(std::make_shared<Impl>(io, std::move(config), std::move(clock), std::move(on_bytes),
+                                   std::move(on_state))) {}
+
+TcpClient::~TcpClient() { impl_->stop(/*notify=*/false); }
+
+Status TcpClient::start() {
+  Status valid = impl_->config().validate();
+  if (!valid.ok()) return valid;
+  impl_->start();
+  return Status::success();
+}
+
+void TcpClient::stop() { impl_->stop(); }
+Status TcpClient::write(std::span<const std::uint8_t> bytes) { return impl_->write(bytes); }
+const DeviceHealth& TcpClient::health() const { return impl_->health(); }
+
+}  // namespace vog::io
