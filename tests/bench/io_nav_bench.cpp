@@ -1,6 +1,6 @@
 // vog-bench io: transport throughput on this machine's real kernel paths (serial over a
 // pseudo-terminal, CAN records over SOCK_SEQPACKET) and dead-reckoning update rate, medians over
-// repeats. No targets in issue 6; the figures size the daemon's I/O thread budget (a DVL at
+// repeats. No targets; the figures size the daemon's I/O thread budget (a DVL at
 // 115200 baud is 11.5 kB/s, an IMU on CAN 400 frames/s).
 #include "bench_registry.hpp"
 

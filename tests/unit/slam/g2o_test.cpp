@@ -1,4 +1,4 @@
-// g2o import and chi2 (issue 4): public datasets against independently computed reference optima,
+// g2o import and chi2: public datasets against independently computed reference optima,
 // synthetic 3D graphs, and malformed input.
 #include "vog/slam/g2o.hpp"
 

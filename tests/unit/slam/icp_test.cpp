@@ -1,4 +1,4 @@
-// ICP (issue 4 tests 1-2): flat wall (degenerate along the wall), corner (full rank), baseline 2D
+// ICP : flat wall (degenerate along the wall), corner (full rank), baseline 2D
 // point-to-point with the thesis Alg. 6 acceptance checks, and bad input. Clouds are sampled on
 // planes with normals, with seeded noise.
 #include "vog/geometry/sonar.hpp"

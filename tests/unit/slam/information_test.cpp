@@ -1,4 +1,4 @@
-// Whitening by the upper-triangular square root of the information matrix (issue 4).
+// Whitening by the upper-triangular square root of the information matrix.
 #include "vog/slam/information.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Vehicle pose graph (issue 4): odometry / absolute / loop-closure factors, robust loss against
+// Vehicle pose graph: odometry / absolute / loop-closure factors, robust loss against
 // outlier closures, partial factors, and bad input.
 #include "vog/slam/pose_graph.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Fault injection shared by the mock devices (issue 6: garbage bytes, truncated frames, bad
+// Fault injection shared by the mock devices (garbage bytes, truncated frames, bad
 // checksums, dropouts; disappearing devices are handled by each transport mock).
 
 #include <array>
