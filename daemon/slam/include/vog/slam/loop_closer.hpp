@@ -1,0 +1,101 @@
+#pragma once
+// LoopCloser (thesis Alg. 6-8): for a newly closed submap, finds loop-closure candidates among
+// non-consecutive submaps under the current base-pose estimates (centroid-in-AABB gate, Alg. 6),
+// registers each pair with ICP and returns the accepted registrations as pose-graph factors.
+//
+// Modes:
+//  - kPointToPoint2d (`p2p`, thesis Alg. 6): 2D point-to-point ICP on (x, y, yaw), accepted by the
+//    three checks of checkIcpAcceptance (converged, fitness, disagreement with odometry within the
+//    drift bound sqrt(cov_x dt + cov_y dt)); the factor constrains x, y and yaw.
+//  - kDegenerate (`degenerate`, thesis Alg. 7-8): degeneracy-aware point-to-plane ICP, the same
+//    acceptance checks, and a partial factor over the well-conditioned directions V_u only.
+//
+// Stateless apart from its configuration: each call is a pure function of its inputs.
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/map/local_grid.hpp"
+#include "vog/slam/icp.hpp"
+#include "vog/slam/loop_candidates.hpp"
+#include "vog/slam/pose_graph.hpp"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vog::slam {
+
+enum class LoopClosureMode { kPointToPoint2d, kDegenerate };
+const char* toString(LoopClosureMode mode);
+// "p2p" or "degenerate".
+Result<LoopClosureMode> parseLoopClosureMode(std::string_view name);
+
+struct LoopCloserConfig {
+  LoopClosureMode mode = LoopClosureMode::kDegenerate;
+  CandidateConfig candidates;
+  PointToPoint2dConfig p2p;
+  PointToPlaneConfig point_to_plane;  // degeneracy_aware is forced on in kDegenerate mode
+  // Drift rates for criterion 3 default to the odometry noise of thesis Eq. 4.1.
+  IcpAcceptanceConfig acceptance{0.05, 0.00138, 0.00138};
+  // Viewing-direction gate, added to Alg. 6: a profiling sonar only sees the faces of objects turned
+  // towards it, so two submaps whose base headings differ much see different faces of the same pilings
+  // (the near halves of a cylinder seen from opposite sides are 2 r apart) and ICP aligns them with a
+  // bias of up to the object size. Pairs whose current base yaws differ by more than this are skipped.
+  double max_heading_difference_rad = 0.5236;  // 30 deg
+  // Criterion 3 extended to heading: the registered yaw may differ from the current estimate's by at
+  // most this (the thesis bounds only x-y; a wrong match between similar pilings often turns).
+  double max_yaw_disagreement_rad = 0.05236;  // 3 deg
+  // Fraction of the source cloud that must find a correspondence at the result (overlap).
+  double min_overlap_fraction = 0.5;
+  Status validate() const;
+};
+
+// A submap as the loop closer sees it: its grid (finalized, cloud in the submap frame), its current
+// base-pose estimate and its first stamp (for the drift bound).
+struct LoopSubmap {
+  std::int64_t index = 0;
+  std::shared_ptr<const map::LocalGrid> grid;
+  geometry::Pose3 T_world_submap = geometry::Pose3::Identity();
+  std::int64_t first_stamp_ns = 0;
+};
+
+// An accepted closure: `to` registered against `from` (T_from_to), and the factor it becomes.
+struct LoopClosure {
+  std::int64_t from = 0;  // the older submap (ICP target)
+  std::int64_t to = 0;    // the new submap (ICP source)
+  geometry::Pose3 T_from_to = geometry::Pose3::Identity();
+  geometry::Pose3 T_from_to_prior = geometry::Pose3::Identity();  // from the estimates before ICP
+  PartialLoopClosure factor;
+  IcpResult icp;
+};
+
+struct LoopCloseStats {
+  int tried = 0;
+  int accepted = 0;
+  int rejected = 0;
+  std::map<std::string, int> rejected_by_reason;  // cause -> count
+  int skipped_heading = 0;  // candidates skipped by the viewing-direction gate (not tried)
+  void add(const LoopCloseStats& other);
+};
+
+struct LoopCloseOutcome {
+  std::vector<LoopClosure> closures;
+  LoopCloseStats stats;
+};
+
+class LoopCloser {
+ public:
+  static Result<LoopCloser> create(const LoopCloserConfig& config);
+  // Closures between `submaps[newest]` and every other candidate submap. Errors on an index out of
+  // range or a submap without a finalized grid; a failed or rejected registration is a statistic.
+  Result<LoopCloseOutcome> closeLoops(const std::vector<LoopSubmap>& submaps, std::size_t newest) const;
+  const LoopCloserConfig& config() const { return config_; }
+
+ private:
+  explicit LoopCloser(const LoopCloserConfig& config) : config_(config) {}
+  LoopCloserConfig config_;
+};
+
+}  // namespace vog::slam

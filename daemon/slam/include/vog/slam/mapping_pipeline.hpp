@@ -1,0 +1,106 @@
+#pragma once
+// MappingPipeline: the mapping thread's algorithm in one class, without threads or I/O (thesis 3.2,
+// 4.2, Alg. 1 and 6-8). Scans with their odometry pose and depth/attitude measurements are fed in time
+// order. When the SubmapBuilder closes a submap the pipeline
+//   1. adds its base pose as a node (initialised by composing the odometry onto the optimised estimate
+//      of the previous node), the odometry factor from the previous node (covariance dt * Sigma) and
+//      the absolute z/roll/pitch factor of its base scan;
+//   2. appends the grid to the VogMap at that estimate;
+//   3. searches loop closures for it (LoopCloser) and adds the accepted ones;
+//   4. optimises the pose graph (when a closure was added, or always if configured);
+//   5. deforms the VogMap with every optimised base pose (Alg. 1) and reports which submaps moved, so
+//      that the caller can run MergedMap::sync on `map().entries()`.
+//
+// Lifecycle: create(); feed() any number of times in time order; finish() closes the last submap.
+// Invariants: the graph has exactly one node per VogMap submap, with the same id (the submap index)
+// and, after every feed()/finish() that returned ok, the same pose; a rejected input changes nothing.
+// An internal failure while processing a closed submap (pose graph or optimiser error, never caused by
+// input that passed validation) leaves graph and map as they were but loses that submap, so the
+// pipeline then refuses further input with the original error (the odometry chain would have a gap).
+// Deterministic: no clocks, no randomness.
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/map/vog_map.hpp"
+#include "vog/slam/loop_closer.hpp"
+#include "vog/slam/pose_graph.hpp"
+#include "vog/slam/submap_builder.hpp"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace vog::slam {
+
+struct MappingPipelineConfig {
+  SubmapBuilderConfig builder;
+  LoopCloserConfig loop_closer;
+  PoseGraphConfig graph;
+  bool loop_closures = true;  // false: submaps stay at raw odometry (the baseline)
+  // Absolute factor noise: depth sensor and IMU attitude (standard deviations). Assumed values for a
+  // strain-gauge depth sensor and an AHRS; the thesis treats z, roll and pitch as observed (4.2).
+  double depth_stddev_m = 0.05;
+  double roll_pitch_stddev_rad = geometry::deg2rad(0.5);
+  // Optimise after every new submap even without a new closure (else only when one was accepted).
+  bool optimize_every_submap = false;
+  Status validate() const;
+};
+
+// What one feed()/finish() changed.
+struct MappingUpdate {
+  std::optional<std::int64_t> closed_submap;  // index (= VogMap id = graph node id) of a new submap
+  std::vector<LoopClosure> closures;          // accepted for it
+  LoopCloseStats loop_stats;                  // of this call
+  bool optimized = false;
+  OptimizeResult optimize;                    // valid when optimized
+  std::vector<map::SubmapId> moved;           // submaps whose base pose changed in the VogMap
+};
+
+// The record of one submap: odometry and current (optimised) base pose.
+struct SubmapRecord {
+  std::int64_t index = 0;
+  geometry::Pose3 T_world_base_odom = geometry::Pose3::Identity();
+  geometry::Pose3 T_world_base = geometry::Pose3::Identity();
+  std::int64_t first_stamp_ns = 0;
+  std::int64_t last_stamp_ns = 0;
+  std::size_t n_scans = 0;
+  CloseReason reason = CloseReason::kFlush;
+};
+
+class MappingPipeline {
+ public:
+  static Result<std::unique_ptr<MappingPipeline>> create(const MappingPipelineConfig& config);
+  MappingPipeline(const MappingPipeline&) = delete;
+  MappingPipeline& operator=(const MappingPipeline&) = delete;
+
+  Result<MappingUpdate> feed(const ScanInput& input);
+  // Closes the active submap (end of a run) and processes it like any other.
+  Result<MappingUpdate> finish();
+
+  const map::VogMap& map() const { return *map_; }
+  const PoseGraph& graph() const { return graph_; }
+  const std::vector<SubmapRecord>& submaps() const { return submaps_; }
+  const std::vector<LoopClosure>& closures() const { return closures_; }
+  const LoopCloseStats& loopStats() const { return stats_; }
+  const MappingPipelineConfig& config() const { return config_; }
+
+ private:
+  MappingPipeline(const MappingPipelineConfig& config, SubmapBuilder builder, LoopCloser closer, PoseGraph graph,
+                  std::unique_ptr<map::VogMap> map)
+      : config_(config), builder_(std::move(builder)), closer_(std::move(closer)), graph_(std::move(graph)),
+        map_(std::move(map)) {}
+  Result<MappingUpdate> process(ClosedSubmap closed);
+
+  MappingPipelineConfig config_;
+  SubmapBuilder builder_;
+  LoopCloser closer_;
+  PoseGraph graph_;
+  std::unique_ptr<map::VogMap> map_;
+  std::vector<SubmapRecord> submaps_;
+  std::vector<LoopClosure> closures_;
+  LoopCloseStats stats_;
+  std::optional<Error> failed_;  // set by an internal failure in process()
+};
+
+}  // namespace vog::slam

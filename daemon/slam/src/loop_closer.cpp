@@ -1,0 +1,174 @@
+#include "vog/slam/loop_closer.hpp"
+
+#include "vog/slam/pose_vector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+
+namespace vog::slam {
+
+namespace {
+
+// Summary key of a rejection, so statistics group by cause rather than by the numbers in a message.
+std::string reasonKey(const IcpResult& r, const IcpAcceptance& a) {
+  if (!r.converged) return "not_converged";
+  if (a.reason.rfind("fitness", 0) == 0) return "fitness";
+  if (a.reason.rfind("disagrees", 0) == 0) return "odometry_disagreement";
+  return "acceptance";
+}
+
+SubmapFootprint footprintOf(const LoopSubmap& s) {
+  SubmapFootprint f;
+  f.index = s.index;
+  f.T_world_submap = s.T_world_submap;
+  const Eigen::AlignedBox3d box = s.grid->knownBox();
+  if (!box.isEmpty()) {
+    f.aabb_min_submap = box.min();
+    f.aabb_max_submap = box.max();
+  }
+  f.centroid_submap = s.grid->cloud().empty() ? Eigen::Vector3d::Zero() : s.grid->cloudCentroid();
+  f.n_points = s.grid->cloud().size();
+  return f;
+}
+
+}  // namespace
+
+const char* toString(LoopClosureMode mode) {
+  return mode == LoopClosureMode::kPointToPoint2d ? "p2p" : "degenerate";
+}
+
+Result<LoopClosureMode> parseLoopClosureMode(std::string_view name) {
+  if (name == "p2p") return LoopClosureMode::kPointToPoint2d;
+  if (name == "degenerate") return LoopClosureMode::kDegenerate;
+  return Error{"loop closure mode '" + std::string(name) + "' is not one of: p2p, degenerate"};
+}
+
+Status LoopCloserConfig::validate() const {
+  if (Status s = candidates.validate(); !s.ok()) return Error{"loop closer config: candidates: " + s.error().message};
+  if (Status s = p2p.validate(); !s.ok()) return Error{"loop closer config: p2p: " + s.error().message};
+  if (Status s = point_to_plane.validate(); !s.ok()) {
+    return Error{"loop closer config: point_to_plane: " + s.error().message};
+  }
+  if (Status s = acceptance.validate(); !s.ok()) return Error{"loop closer config: acceptance: " + s.error().message};
+  if (!(max_heading_difference_rad > 0.0 && max_heading_difference_rad <= std::numbers::pi)) {
+    return Error{"loop closer config: max_heading_difference_rad = " + std::to_string(max_heading_difference_rad) +
+                 " must be in (0, pi]"};
+  }
+  if (!(max_yaw_disagreement_rad > 0.0 && max_yaw_disagreement_rad <= std::numbers::pi)) {
+    return Error{"loop closer config: max_yaw_disagreement_rad = " + std::to_string(max_yaw_disagreement_rad) +
+                 " must be in (0, pi]"};
+  }
+  if (!(min_overlap_fraction >= 0.0 && min_overlap_fraction <= 1.0)) {
+    return Error{"loop closer config: min_overlap_fraction = " + std::to_string(min_overlap_fraction) +
+                 " must be in [0, 1]"};
+  }
+  return Status::success();
+}
+
+void LoopCloseStats::add(const LoopCloseStats& other) {
+  tried += other.tried;
+  accepted += other.accepted;
+  rejected += other.rejected;
+  skipped_heading += other.skipped_heading;
+  for (const auto& [k, n] : other.rejected_by_reason) rejected_by_reason[k] += n;
+}
+
+Result<LoopCloser> LoopCloser::create(const LoopCloserConfig& config) {
+  if (Status s = config.validate(); !s.ok()) return s.error();
+  return LoopCloser(config);
+}
+
+Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& submaps, std::size_t newest) const {
+  if (newest >= submaps.size()) {
+    return Error{"loop closer: newest position " + std::to_string(newest) + " is out of range (" +
+                 std::to_string(submaps.size()) + " submaps)"};
+  }
+  for (const LoopSubmap& s : submaps) {
+    if (!s.grid || !s.grid->finalized()) {
+      return Error{"loop closer: submap " + std::to_string(s.index) + " has no finalized grid"};
+    }
+  }
+  std::vector<SubmapFootprint> footprints;
+  footprints.reserve(submaps.size());
+  for (const LoopSubmap& s : submaps) footprints.push_back(footprintOf(s));
+  auto pairs = findLoopCandidates(footprints, config_.candidates);
+  if (!pairs) return Error{"loop closer: " + pairs.error().message};
+
+  LoopCloseOutcome out;
+  const LoopSubmap& source = submaps[newest];
+  for (const auto& [i, j] : pairs.value()) {
+    if (i != newest && j != newest) continue;
+    const LoopSubmap& target = submaps[i == newest ? j : i];
+    const double dyaw = geometry::wrapAngle(geometry::yawOf(source.T_world_submap.linear()) -
+                                            geometry::yawOf(target.T_world_submap.linear()));
+    if (std::abs(dyaw) > config_.max_heading_difference_rad) {
+      ++out.stats.skipped_heading;
+      continue;
+    }
+    ++out.stats.tried;
+    // T_target_source predicted by the current estimates (the odometry chain plus earlier closures).
+    const geometry::Pose3 T_prior = target.T_world_submap.inverse() * source.T_world_submap;
+    Result<IcpResult> icp = Error{""};
+    if (config_.mode == LoopClosureMode::kPointToPoint2d) {
+      icp = icpPointToPoint2d(source.grid->cloud(), target.grid->cloud(), T_prior, config_.p2p);
+    } else {
+      PointToPlaneConfig c = config_.point_to_plane;
+      c.degeneracy_aware = true;
+      icp = icpPointToPlane(source.grid->cloud(), target.grid->cloud(), T_prior, c);
+    }
+    if (!icp) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason["registration_failed"];
+      continue;
+    }
+    const double dt_s = 1e-9 * static_cast<double>(source.first_stamp_ns - target.first_stamp_ns);
+    const IcpAcceptance acc = checkIcpAcceptance(icp.value(), T_prior, dt_s, config_.acceptance);
+    if (!acc.accepted) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason[reasonKey(icp.value(), acc)];
+      continue;
+    }
+    const double yaw_disagreement = std::abs(geometry::wrapAngle(geometry::yawOf(icp->T_target_source.linear()) -
+                                                                 geometry::yawOf(T_prior.linear())));
+    if (yaw_disagreement > config_.max_yaw_disagreement_rad) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason["yaw_disagreement"];
+      continue;
+    }
+    const double overlap =
+        static_cast<double>(icp->n_correspondences) / static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));
+    if (overlap < config_.min_overlap_fraction) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason["overlap"];
+      continue;
+    }
+    if (icp->V_u.rows() == 0) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason["no_well_conditioned_direction"];
+      continue;
+    }
+    // Thesis Alg. 8: measurement V_u x_icp with covariance V_u Cov V_u^T. For the 2D point-to-point
+    // baseline V_u spans x, y and yaw (every estimated direction).
+    auto factor = makePartialLoopClosure(icp->V_u, toXyzRpy(icp->T_target_source), icp->covariance);
+    if (!factor) {
+      ++out.stats.rejected;
+      ++out.stats.rejected_by_reason["bad_factor"];
+      continue;
+    }
+    LoopClosure c;
+    c.from = target.index;
+    c.to = source.index;
+    c.T_from_to = icp->T_target_source;
+    c.T_from_to_prior = T_prior;
+    c.factor = std::move(factor.value());
+    c.icp = std::move(icp.value());
+    out.closures.push_back(std::move(c));
+    ++out.stats.accepted;
+  }
+  return out;
+}
+
+}  // namespace vog::slam

@@ -1,0 +1,167 @@
+#include "vog/slam/mapping_pipeline.hpp"
+
+#include "vog/slam/information.hpp"
+#include "vog/slam/pose_vector.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+namespace vog::slam {
+
+Status MappingPipelineConfig::validate() const {
+  if (Status s = builder.validate(); !s.ok()) return Error{"mapping config: builder: " + s.error().message};
+  if (Status s = loop_closer.validate(); !s.ok()) return Error{"mapping config: loop_closer: " + s.error().message};
+  if (Status s = graph.validate(); !s.ok()) return Error{"mapping config: graph: " + s.error().message};
+  if (!std::isfinite(depth_stddev_m) || depth_stddev_m <= 0.0) {
+    std::ostringstream os;
+    os << "mapping config: depth_stddev_m = " << depth_stddev_m << " must be > 0";
+    return Error{os.str()};
+  }
+  if (!std::isfinite(roll_pitch_stddev_rad) || roll_pitch_stddev_rad <= 0.0) {
+    std::ostringstream os;
+    os << "mapping config: roll_pitch_stddev_rad = " << roll_pitch_stddev_rad << " must be > 0";
+    return Error{os.str()};
+  }
+  return Status::success();
+}
+
+Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPipelineConfig& config) {
+  if (Status s = config.validate(); !s.ok()) return s.error();
+  auto builder = SubmapBuilder::create(config.builder);
+  if (!builder) return builder.error();
+  auto closer = LoopCloser::create(config.loop_closer);
+  if (!closer) return closer.error();
+  auto graph = PoseGraph::create(config.graph);
+  if (!graph) return graph.error();
+  auto map = map::VogMap::create(config.builder.grid);
+  if (!map) return map.error();
+  return std::unique_ptr<MappingPipeline>(new MappingPipeline(config, std::move(builder.value()),
+                                                              std::move(closer.value()), std::move(graph.value()),
+                                                              std::move(map.value())));
+}
+
+Result<MappingUpdate> MappingPipeline::feed(const ScanInput& input) {
+  if (failed_) return Error{"mapping pipeline stopped: " + failed_->message};
+  auto closed = builder_.addScan(input);
+  if (!closed) return closed.error();
+  if (!closed->has_value()) return MappingUpdate{};
+  auto update = process(std::move(**closed));
+  if (!update) failed_ = update.error();
+  return update;
+}
+
+Result<MappingUpdate> MappingPipeline::finish() {
+  if (failed_) return Error{"mapping pipeline stopped: " + failed_->message};
+  auto closed = builder_.flush();
+  if (!closed) return closed.error();
+  if (!closed->has_value()) return MappingUpdate{};
+  auto update = process(std::move(**closed));
+  if (!update) failed_ = update.error();
+  return update;
+}
+
+Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
+  MappingUpdate update;
+  const NodeId id = closed.index;
+  // All graph changes happen on a copy, committed only when every step succeeded.
+  PoseGraph graph = graph_;
+
+  // Initial estimate: the planar odometry composed onto the previous node's current estimate; z, roll
+  // and pitch are observed directly (thesis 4.2), so they come from the base scan's odometry pose.
+  geometry::Pose3 T_world_init = closed.T_world_base_odom;
+  if (closed.has_previous) {
+    const SubmapRecord& prev = submaps_.back();
+    const Vector6d p = toXyzRpy(prev.T_world_base);
+    Vector6d x = toXyzRpy(closed.T_world_base_odom);
+    const Eigen::Vector3d& d = closed.odometry_from_previous;
+    const double c = std::cos(p(kYaw));
+    const double s = std::sin(p(kYaw));
+    x(kX) = p(kX) + c * d.x() - s * d.y();
+    x(kY) = p(kY) + s * d.x() + c * d.y();
+    x(kYaw) = geometry::wrapAngle(p(kYaw) + d.z());
+    T_world_init = fromXyzRpy(x);
+  }
+  if (Status s = graph.addNode(id, T_world_init); !s.ok()) return Error{"mapping: " + s.error().message};
+  if (closed.has_previous) {
+    auto information = informationFromCovariance(closed.odometry_covariance, "odometry covariance");
+    if (!information) return Error{"mapping: submap " + std::to_string(id) + ": " + information.error().message};
+    if (Status s = graph.addOdometryFactor(submaps_.back().index, id, closed.odometry_from_previous,
+                                           Eigen::Matrix3d(information.value()));
+        !s.ok()) {
+      return Error{"mapping: " + s.error().message};
+    }
+  }
+  const double var_z = config_.depth_stddev_m * config_.depth_stddev_m;
+  const double var_rp = config_.roll_pitch_stddev_rad * config_.roll_pitch_stddev_rad;
+  const Eigen::Matrix3d absolute_information = Eigen::Vector3d(1.0 / var_z, 1.0 / var_rp, 1.0 / var_rp).asDiagonal();
+  if (Status s = graph.addAbsoluteFactor(id, closed.base_z_roll_pitch, absolute_information); !s.ok()) {
+    return Error{"mapping: " + s.error().message};
+  }
+
+  // Loop closures against the other submaps at their current estimates.
+  std::vector<SubmapRecord> records = submaps_;
+  SubmapRecord record;
+  record.index = id;
+  record.T_world_base_odom = closed.T_world_base_odom;
+  record.T_world_base = T_world_init;
+  record.first_stamp_ns = closed.first_stamp_ns;
+  record.last_stamp_ns = closed.last_stamp_ns;
+  record.n_scans = closed.n_scans;
+  record.reason = closed.reason;
+  records.push_back(record);
+
+  const std::vector<map::SubmapEntry> entries = map_->entries();
+  if (config_.loop_closures) {
+    std::vector<LoopSubmap> loop_submaps;
+    loop_submaps.reserve(records.size());
+    for (std::size_t k = 0; k < entries.size(); ++k) {
+      loop_submaps.push_back({records[k].index, entries[k].grid, records[k].T_world_base, records[k].first_stamp_ns});
+    }
+    loop_submaps.push_back({id, closed.grid, T_world_init, closed.first_stamp_ns});
+    auto outcome = closer_.closeLoops(loop_submaps, loop_submaps.size() - 1);
+    if (!outcome) return Error{"mapping: " + outcome.error().message};
+    for (const LoopClosure& c : outcome->closures) {
+      if (Status s = graph.addPartialLoopClosure(c.from, c.to, c.factor); !s.ok()) {
+        return Error{"mapping: " + s.error().message};
+      }
+    }
+    update.closures = std::move(outcome->closures);
+    update.loop_stats = outcome->stats;
+  }
+
+  if (!update.closures.empty() || config_.optimize_every_submap) {
+    auto result = graph.optimize();
+    if (!result) return Error{"mapping: " + result.error().message};
+    update.optimized = true;
+    update.optimize = result.value();
+  }
+
+  std::vector<geometry::Pose3> poses;
+  poses.reserve(records.size());
+  for (SubmapRecord& r : records) {
+    auto pose = graph.pose(r.index);
+    if (!pose) return Error{"mapping: " + pose.error().message};
+    r.T_world_base = pose.value();
+    poses.push_back(pose.value());
+  }
+
+  // Commit: the map first (the only step that can still fail), then the deformation (Alg. 1).
+  if (Status s = map_->addSubmap(static_cast<map::SubmapId>(id), closed.grid, T_world_init); !s.ok()) {
+    return Error{"mapping: " + s.error().message};
+  }
+  if (Status s = map_->deform(poses); !s.ok()) return Error{"mapping: deform: " + s.error().message};
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    if (entries[k].T_world_submap.matrix() != poses[k].matrix()) {
+      update.moved.push_back(entries[k].id);
+    }
+  }
+  graph_ = std::move(graph);
+  submaps_ = std::move(records);
+  for (const LoopClosure& c : update.closures) closures_.push_back(c);
+  stats_.add(update.loop_stats);
+  update.closed_submap = id;
+  return update;
+}
+
+}  // namespace vog::slam

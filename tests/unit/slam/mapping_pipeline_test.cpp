@@ -1,0 +1,214 @@
+// MappingPipeline and LoopCloser on a drifting orbit over the synthetic pier (issue 4): loop closures
+// are found and accepted, none is wrong (0.2 m / 2 deg of the truth), optimisation lowers the base-pose
+// error below raw odometry, the VogMap holds exactly the optimised poses, and bad input changes nothing.
+#include "pipeline_fixture.hpp"
+#include "vog/map/merged_map.hpp"
+#include "vog/slam/loop_closer.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
+#include "vog/slam/pose_vector.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+namespace vog::slam {
+namespace {
+
+using geometry::deg2rad;
+using testing::Run;
+
+// About three laps (radius 5.5, 6.2, 6.9 m). The odometry's position random walk is below thesis
+// Eq. 4.1 (at 0.00138 m^2/s a 40-scan submap is itself bent by ~0.1 m, which alone breaks the 0.2 m /
+// 2 deg bound) and a heading-rate bias supplies the drift (heading error dominates, thesis 4.5.3):
+// about 0.4 m base-pose RMSE by the end of the run.
+constexpr int kScans = 1100;
+constexpr int kStride = 2;
+constexpr double kCovXy = 0.0003;
+constexpr double kYawBias = deg2rad(0.02);
+
+MappingPipelineConfig pipelineConfig(LoopClosureMode mode) {
+  MappingPipelineConfig c;
+  c.builder.grid.resolution_m = 0.1;
+  c.builder.max_scans = 40;
+  c.builder.odometry_cov_x_m2_per_s = kCovXy;
+  c.builder.odometry_cov_y_m2_per_s = kCovXy;
+  c.builder.odometry_cov_yaw_rad2_per_s = 1e-5;
+  c.loop_closer.mode = mode;
+  c.loop_closer.p2p.max_correspondence_distance_m = 0.5;
+  c.loop_closer.point_to_plane.max_correspondence_distance_m = 0.5;
+  return c;
+}
+
+const Run& sharedRun() {
+  static const Run run = testing::makeRun(kScans, kStride, kCovXy, kYawBias, 42);
+  return run;
+}
+
+struct Outcome {
+  std::unique_ptr<MappingPipeline> pipeline;
+  double rmse_odom_m = 0.0;
+  double rmse_opt_m = 0.0;
+  int wrong = 0;
+};
+
+Outcome runPipeline(LoopClosureMode mode, bool closures) {
+  MappingPipelineConfig c = pipelineConfig(mode);
+  c.loop_closures = closures;
+  auto p = MappingPipeline::create(c);
+  EXPECT_TRUE(p.ok());
+  Outcome out;
+  out.pipeline = std::move(p.value());
+  const slam::testing::Run& run = sharedRun();
+  std::vector<geometry::Pose3> before;
+  auto check = [&](const Result<MappingUpdate>& u) {
+    ASSERT_TRUE(u.ok()) << u.error().message;
+    const std::vector<geometry::Pose3> after = out.pipeline->map().poses();
+    if (u->closed_submap) {
+      ASSERT_EQ(after.size(), before.size() + 1);
+      EXPECT_EQ(static_cast<std::int64_t>(out.pipeline->map().entries().back().id), *u->closed_submap);
+    }
+    // `moved` names exactly the old submaps whose pose changed.
+    std::vector<map::SubmapId> changed;
+    for (std::size_t k = 0; k < before.size(); ++k) {
+      if (before[k].matrix() != after[k].matrix()) changed.push_back(static_cast<map::SubmapId>(k));
+    }
+    EXPECT_EQ(changed, u->moved);
+    if (!u->closures.empty()) {
+      EXPECT_TRUE(u->optimized);
+    }
+    before = after;
+  };
+  for (const ScanInput& in : run.inputs) check(out.pipeline->feed(in));
+  check(out.pipeline->finish());
+  double se_odom = 0.0;
+  double se_opt = 0.0;
+  for (const SubmapRecord& r : out.pipeline->submaps()) {
+    const geometry::Pose3& T_true = run.truth[testing::scanIndexOf(r.first_stamp_ns)];
+    se_odom += (r.T_world_base_odom.translation() - T_true.translation()).squaredNorm();
+    se_opt += (r.T_world_base.translation() - T_true.translation()).squaredNorm();
+  }
+  const double n = static_cast<double>(out.pipeline->submaps().size());
+  out.rmse_odom_m = std::sqrt(se_odom / n);
+  out.rmse_opt_m = std::sqrt(se_opt / n);
+  for (const LoopClosure& lc : out.pipeline->closures()) {
+    const auto& s = out.pipeline->submaps();
+    const geometry::Pose3 T_from = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.from)].first_stamp_ns)];
+    const geometry::Pose3 T_to = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.to)].first_stamp_ns)];
+    const geometry::Pose3 T_true = T_from.inverse() * T_to;
+    // Error within the constrained subspace: a partial closure (Alg. 8) keeps its degenerate directions
+    // at the prior and does not measure them; for p2p V_u spans x, y and yaw.
+    const Vector6d e = xyzRpyDifference(toXyzRpy(lc.T_from_to), toXyzRpy(T_true));
+    const Vector6d e_u = lc.factor.V_u.transpose() * (lc.factor.V_u * e);
+    const double dt = e_u.head<3>().norm();
+    const double dr = e_u.tail<3>().norm();
+    if (dt > 0.2 || dr > deg2rad(2.0)) ++out.wrong;
+  }
+  const LoopCloseStats& st = out.pipeline->loopStats();
+  std::cout << toString(mode) << " closures=" << closures << " submaps=" << n << " tried=" << st.tried
+            << " accepted=" << st.accepted << " wrong=" << out.wrong << " rmse_odom=" << out.rmse_odom_m
+            << " rmse_opt=" << out.rmse_opt_m;
+  for (const auto& [k, v] : st.rejected_by_reason) std::cout << " " << k << "=" << v;
+  std::cout << "\n";
+  return out;
+}
+
+// The VogMap holds one entry per graph node with bit-identical poses (Alg. 1 deformation).
+void expectMapEqualsGraph(const MappingPipeline& p) {
+  const auto entries = p.map().entries();
+  ASSERT_EQ(entries.size(), p.graph().numNodes());
+  ASSERT_EQ(entries.size(), p.submaps().size());
+  for (const map::SubmapEntry& e : entries) {
+    auto pose = p.graph().pose(static_cast<NodeId>(e.id));
+    ASSERT_TRUE(pose.ok());
+    EXPECT_EQ(pose->matrix(), e.T_world_submap.matrix()) << "submap " << e.id;
+    EXPECT_EQ(p.submaps()[e.id].T_world_base.matrix(), e.T_world_submap.matrix());
+  }
+}
+
+TEST(MappingPipeline, PointToPointClosuresCorrectDriftAndNoneIsWrong) {
+  const Outcome o = runPipeline(LoopClosureMode::kPointToPoint2d, true);
+  expectMapEqualsGraph(*o.pipeline);
+  EXPECT_GE(o.pipeline->loopStats().accepted, 3);
+  EXPECT_EQ(o.wrong, 0);
+  EXPECT_LT(o.rmse_opt_m, o.rmse_odom_m);
+}
+
+TEST(MappingPipeline, DegeneracyAwareClosuresCorrectDriftAndNoneIsWrong) {
+  const Outcome o = runPipeline(LoopClosureMode::kDegenerate, true);
+  expectMapEqualsGraph(*o.pipeline);
+  // Partial factors: every closure constrains at least one and at most the three planar directions.
+  for (const LoopClosure& lc : o.pipeline->closures()) {
+    EXPECT_GE(lc.factor.rank(), 1);
+    EXPECT_LE(lc.factor.rank(), 3);
+  }
+  EXPECT_GE(o.pipeline->loopStats().accepted, 3);
+  EXPECT_EQ(o.wrong, 0);
+  EXPECT_LT(o.rmse_opt_m, o.rmse_odom_m);
+}
+
+TEST(MappingPipeline, WithoutClosuresSubmapsStayAtOdometry) {
+  const Outcome o = runPipeline(LoopClosureMode::kPointToPoint2d, false);
+  EXPECT_EQ(o.pipeline->loopStats().tried, 0);
+  expectMapEqualsGraph(*o.pipeline);
+  for (const SubmapRecord& r : o.pipeline->submaps()) {
+    // x, y, yaw from odometry composition; the same up to rounding.
+    EXPECT_LT((r.T_world_base.translation() - r.T_world_base_odom.translation()).norm(), 1e-9);
+  }
+}
+
+// A short prefix of the run: bad input in the middle is rejected and the result is bit-identical to a
+// run that never saw it; two runs are bit-identical (determinism).
+TEST(MappingPipeline, RejectsBadInputWithoutChangingStateAndIsDeterministic) {
+  const slam::testing::Run& run = sharedRun();
+  const std::size_t n = 300;
+  auto clean = MappingPipeline::create(pipelineConfig(LoopClosureMode::kDegenerate));
+  auto dirty = MappingPipeline::create(pipelineConfig(LoopClosureMode::kDegenerate));
+  ASSERT_TRUE(clean.ok() && dirty.ok());
+  for (std::size_t k = 0; k < n; ++k) {
+    ASSERT_TRUE((*clean)->feed(run.inputs[k]).ok());
+    if (k == 85) {  // 5 scans after the third submap closed
+      ScanInput nan_pose = run.inputs[k + 1];
+      nan_pose.T_world_vehicle_odom.linear()(0, 0) = std::numeric_limits<double>::quiet_NaN();
+      auto r1 = (*dirty)->feed(nan_pose);
+      ASSERT_FALSE(r1.ok());
+      EXPECT_NE(r1.error().message.find("pose"), std::string::npos) << r1.error().message;
+      ScanInput old_stamp = run.inputs[k + 1];
+      old_stamp.scan.stamp_ns = run.inputs[k - 1].scan.stamp_ns;
+      EXPECT_FALSE((*dirty)->feed(old_stamp).ok());
+      ScanInput wide = run.inputs[k + 1];
+      wide.scan.range_m.push_back(3.0F);
+      auto r3 = (*dirty)->feed(wide);
+      ASSERT_FALSE(r3.ok());
+      EXPECT_NE(r3.error().message.find("97 beams"), std::string::npos) << r3.error().message;
+    }
+    ASSERT_TRUE((*dirty)->feed(run.inputs[k]).ok());
+  }
+  ASSERT_TRUE((*clean)->finish().ok());
+  ASSERT_TRUE((*dirty)->finish().ok());
+  const auto a = (*clean)->map().poses();
+  const auto b = (*dirty)->map().poses();
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GE(a.size(), 4U);
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k].matrix(), b[k].matrix()) << "submap " << k;
+  EXPECT_EQ((*clean)->graph().numFactors(), (*dirty)->graph().numFactors());
+}
+
+TEST(MappingPipeline, ConfigValidationNamesTheKey) {
+  MappingPipelineConfig c;
+  EXPECT_TRUE(c.validate().ok());
+  c.depth_stddev_m = -1.0;
+  auto p = MappingPipeline::create(c);
+  ASSERT_FALSE(p.ok());
+  EXPECT_NE(p.error().message.find("depth_stddev_m"), std::string::npos) << p.error().message;
+  c = {};
+  c.loop_closer.max_heading_difference_rad = 0.0;
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("max_heading_difference_rad"), std::string::npos);
+  EXPECT_TRUE(parseLoopClosureMode("p2p").ok());
+  EXPECT_FALSE(parseLoopClosureMode("p2pl").ok());
+}
+
+}  // namespace
+}  // namespace vog::slam
