@@ -1,4 +1,4 @@
-// MappingPipeline and LoopCloser on a drifting orbit over the synthetic pier (issue 4): loop closures
+// MappingPipeline and LoopCloser on a drifting orbit over the synthetic pier: loop closures
 // are found and accepted, none is wrong (0.2 m / 2 deg of the truth), optimisation lowers the base-pose
 // error below raw odometry, the VogMap holds exactly the optimised poses, and bad input changes nothing.
 #include "pipeline_fixture.hpp"
