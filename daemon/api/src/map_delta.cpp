@@ -38,10 +38,10 @@ v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_
     std::string values(kVoxels * sizeof(float), '\0');
     for (int i = 0; i < kVoxels; ++i) {
       const auto idx = static_cast<std::size_t>(i);
-      if (block->count[idx] == 0) continue;
+      if (block->count(idx) == 0) continue;
       known[idx / 8] = static_cast<char>(known[idx / 8] | (1 << (i % 8)));
       const auto value = static_cast<float>(
-          bounds.clamp(static_cast<double>(block->sum[idx]) / map::MergedMap::kFixedScale));
+          bounds.clamp(block->sum(idx)));
       std::memcpy(values.data() + idx * sizeof(float), &value, sizeof(float));
     }
     out->set_known(std::move(known));

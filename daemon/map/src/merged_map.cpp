@@ -42,8 +42,8 @@ const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
 
 VoxelValue MergedMap::valueOf(const Block& block, int index) const {
   const auto i = static_cast<std::size_t>(index);
-  if (block.count[i] == 0) return {};
-  const double clamped = bounds_.clamp(static_cast<double>(block.sum[i]) / kFixedScale);
+  if (block.count(i) == 0) return {};
+  const double clamped = bounds_.clamp(block.sum(i));
   return {clamped, bounds_.classify(clamped)};
 }
 
@@ -150,11 +150,13 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
       continue;
     }
     const SubmapEntry& old = it->second;
-    const bool moved = old.grid != e.grid ||
-                       geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
-                       geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad ||
-                       (config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0 &&
-                        !old.T_world_submap.isApprox(e.T_world_submap, 0.0));
+    // Moves accumulate against the pose the submap was merged at, so many small ones still trigger.
+    const bool same_pose = old.T_world_submap.matrix() == e.T_world_submap.matrix();
+    const bool exact = config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0;
+    const bool beyond_tolerance =
+        geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
+        geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad;
+    const bool moved = old.grid != e.grid || (!same_pose && (exact || beyond_tolerance));
     if (!moved) continue;
     (void)remove(e.id);
     if (auto s = add(e); !s) return s.error();
@@ -186,8 +188,9 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
       gmin[i] = static_cast<int>(std::ceil((centre_world[i] - extent_world[i]) * inv_resolution_ - 0.5 - 1e-6));
       gmax[i] = static_cast<int>(std::floor((centre_world[i] + extent_world[i]) * inv_resolution_ - 0.5 + 1e-6));
     }
-    const std::int64_t delta = sign * std::llround(static_cast<double>(leaf.log_odds) * kFixedScale);
-    const int count_delta = sign;
+    // One addition updates sum and count together: value * 2^16 + 1 (times the sign).
+    const std::int64_t delta =
+        sign * (std::llround(static_cast<double>(leaf.log_odds) * kFixedScale) * (std::int64_t{1} << kCountBits) + 1);
     VoxelKey g;
     for (g.z() = gmin.z(); g.z() <= gmax.z(); ++g.z()) {
       for (g.y() = gmin.y(); g.y() <= gmax.y(); ++g.y()) {
@@ -208,11 +211,10 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
             block->version = version_;
           }
           const auto i = static_cast<std::size_t>(indexIn(g));
-          const std::uint16_t before = block->count[i];
-          block->sum[i] += delta;
-          block->count[i] = static_cast<std::uint16_t>(before + count_delta);
+          const std::uint32_t before = block->count(i);
+          block->packed[i] += delta;
           if (before == 0) ++block->n_known;
-          if (block->count[i] == 0) {
+          if (block->count(i) == 0) {
             --block->n_known;
             if (block->n_known == 0) emptied.push_back(packed);
           }
@@ -265,7 +267,7 @@ bool MergedMap::sameVoxels(const MergedMap& other) const {
   bool same = true;
   blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
     const Block* theirs = other.blocks_.find(packed);
-    same = same && theirs != nullptr && block->sum == theirs->sum && block->count == theirs->count;
+    same = same && theirs != nullptr && block->packed == theirs->packed;
   });
   return same;
 }

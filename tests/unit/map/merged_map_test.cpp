@@ -163,9 +163,9 @@ TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
       const VoxelKey k = VoxelKey(std::get<0>(origin), std::get<1>(origin), std::get<2>(origin)) +
                          VoxelKey(i & 7, (i >> 3) & 7, i >> 6);
       const VoxelValue v = merged->at(k);
-      ASSERT_EQ(v.status == Occupancy::kUnknown, block.count[static_cast<std::size_t>(i)] == 0);
+      ASSERT_EQ(v.status == Occupancy::kUnknown, block.count(static_cast<std::size_t>(i)) == 0);
       if (v.status != Occupancy::kUnknown) {
-        ASSERT_EQ(v.log_odds, config_.bounds().clamp(static_cast<double>(block.sum[static_cast<std::size_t>(i)]) / MergedMap::kFixedScale));
+        ASSERT_EQ(v.log_odds, config_.bounds().clamp(block.sum(static_cast<std::size_t>(i))));
       }
     }
   }

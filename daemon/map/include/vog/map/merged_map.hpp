@@ -2,9 +2,10 @@
 // MergedMap (thesis 3.4.2 Alg. 3-4, 4.5.5): the cached global map of a VogMap.
 //
 // Each global voxel holds the unclamped sum of the log-odds of every submap that knows the voxel's
-// centre, and how many submaps know it (0 = unknown). Sums are kept in fixed point (2^-32 log-odds,
-// int64), so adding and removing a submap are exact inverses: an incrementally maintained map is
-// bit-identical to one merged from scratch. Values are clamped at query time (OctoMap would clamp on
+// centre, and how many submaps know it (0 = unknown), packed in one int64: sum in fixed point
+// (2^-28 log-odds) times 2^16, plus the count. A submap's contribution is one integer addition of
+// (value << 16) + 1, so adding and removing a submap are exact inverses (an incrementally maintained
+// map is bit-identical to one merged from scratch), and a lookup touches one cache line. Values are clamped at query time (OctoMap would clamp on
 // every update, which breaks removal).
 //
 // Merging a submap evaluates it at global voxel centres (never scatters its voxels: rotations alias):
@@ -60,13 +61,20 @@ class MergedMap {
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockSide = 1 << kBlockBits;
   static constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
-  static constexpr double kFixedScale = 4294967296.0;  // 2^32 fixed-point units per log-odds
+  static constexpr double kFixedScale = 268435456.0;  // 2^28 fixed-point units per log-odds
+  static constexpr int kCountBits = 16;                 // up to 65535 submaps know one voxel
+  // 47 bits of sum magnitude at 2^-28 hold +-524288 log-odds: 65535 submaps at the clamping bound.
 
   struct Block {
-    std::array<std::int64_t, kBlockVoxels> sum{};     // fixed-point, unclamped
-    std::array<std::uint16_t, kBlockVoxels> count{};  // submaps knowing the voxel
+    std::array<std::int64_t, kBlockVoxels> packed{};  // (fixed-point sum << 16) + count, unclamped
     std::uint32_t n_known = 0;                        // voxels with count > 0
     std::uint64_t version = 0;                        // map version of the last change
+
+    std::uint32_t count(std::size_t i) const { return static_cast<std::uint32_t>(packed[i] & 0xFFFF); }
+    // Unclamped log-odds sum of voxel i.
+    double sum(std::size_t i) const {
+      return static_cast<double>((packed[i] - static_cast<std::int64_t>(count(i))) >> kCountBits) / kFixedScale;
+    }
   };
 
   static Result<std::unique_ptr<MergedMap>> create(const GridConfig& config);
@@ -153,7 +161,7 @@ void MergedMap::forEachKnown(F&& f) const {
   blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
     const VoxelKey base = unpackBlock(packed) * kBlockSide;
     for (int i = 0; i < kBlockVoxels; ++i) {
-      if (block->count[static_cast<std::size_t>(i)] == 0) continue;
+      if (block->count(static_cast<std::size_t>(i)) == 0) continue;
       const VoxelKey key = base + VoxelKey(i & (kBlockSide - 1), (i >> kBlockBits) & (kBlockSide - 1),
                                            i >> (2 * kBlockBits));
       f(key, valueOf(*block, i));
