@@ -1,8 +1,10 @@
 #include "vog/nav/dead_reckoning.hpp"
 
+#include <iomanip>
+#include <sstream>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace vog::nav {
 namespace {
@@ -12,9 +14,9 @@ constexpr double kNsPerS = 1e9;
 double seconds(std::int64_t dt_ns) { return static_cast<double>(dt_ns) / kNsPerS; }
 
 std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3g", v);
-  return buf;
+  std::ostringstream os;
+  os << std::setprecision(3) << v;
+  return os.str();
 }
 
 Eigen::Matrix3d rotationFromRpy(double roll, double pitch, double yaw) {
@@ -89,9 +91,9 @@ Status DeadReckoning::addImu(const imu::ImuSample& sample) {
                                      std::to_string(last_imu_ns_) + " ns)");
   }
   if (sample.status != 0) {
-    char buf[16];
-    std::snprintf(buf, sizeof(buf), "0x%08x", sample.status);
-    return reject(imu_rejected_, std::string("imu status ") + buf + " reports a fault");
+    std::ostringstream status;
+    status << "0x" << std::hex << std::setw(8) << std::setfill('0') << sample.status;
+    return reject(imu_rejected_, "imu status " + status.str() + " reports a fault");
   }
   if (!sample.attitude) return reject(imu_rejected_, "imu sample carries no attitude");
   const imu::ImuAttitude& a = *sample.attitude;

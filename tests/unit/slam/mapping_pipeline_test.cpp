@@ -148,7 +148,7 @@ TEST(MappingPipeline, DegeneracyAwareClosuresCorrectDriftAndNoneIsWrong) {
   EXPECT_LT(o.rmse_opt_m, o.rmse_odom_m);
 }
 
-TEST(MappingPipeline, WithoutClosuresSubmapsStayAtOdometry) {
+TEST(MappingPipeline, WithoutClosuresSubmapsKeepTheirOdometryPoses) {
   const Outcome o = runPipeline(LoopClosureMode::kPointToPoint2d, false);
   EXPECT_EQ(o.pipeline->loopStats().tried, 0);
   expectMapEqualsGraph(*o.pipeline);
