@@ -1,8 +1,9 @@
 #include "vog/slam/icp.hpp"
 
+#include "vog/slam/nearest_neighbours.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <nanoflann.hpp>
 
 #include <cmath>
 #include <memory>
@@ -11,47 +12,6 @@
 
 namespace vog::slam {
 namespace {
-
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3d>& points;
-  std::size_t kdtree_get_point_count() const { return points.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i](static_cast<Eigen::Index>(dim)); }
-  template <class Box>
-  bool kdtree_get_bbox(Box& /*box*/) const {
-    return false;
-  }
-};
-
-using KdTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
-                                        std::size_t>;
-
-// Nearest-neighbour index over a target cloud. Lifecycle: built once from a cloud that must outlive
-// it; read-only afterwards.
-class NearestNeighbours {
- public:
-  // Built out of line: GCC 12 at -O3 reports a false -Wnull-dereference inside the std::vector
-  // resize that nanoflann's buildIndex() inlines here.
-  explicit NearestNeighbours(const std::vector<Eigen::Vector3d>& points);
-
-  // Index of the nearest target point and its squared distance.
-  std::pair<std::size_t, double> nearest(const Eigen::Vector3d& q) const {
-    std::size_t index = 0;
-    double dist_sq = 0.0;
-    tree_.knnSearch(q.data(), 1, &index, &dist_sq);
-    return {index, dist_sq};
-  }
-
- private:
-  CloudAdaptor adaptor_;
-  KdTree tree_;
-};
-
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wnull-dereference"
-[[gnu::noinline]] NearestNeighbours::NearestNeighbours(const std::vector<Eigen::Vector3d>& points)
-    : adaptor_{points}, tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {}
-#pragma GCC diagnostic pop
 
 Status checkCloud(const geometry::PointCloud& cloud, const char* which, std::size_t min_points, bool need_normals) {
   if (cloud.size() < min_points) {

@@ -13,20 +13,11 @@
 namespace vog::sim {
 
 Status SurveyConfig::validate() const {
-  if (!(sonar_rate_hz > 0.0) || !std::isfinite(sonar_rate_hz) || sonar_rate_hz > odometry.rate_hz)
-    return Error{"survey.sonar_rate_hz must be in (0, odometry.rate_hz], got " + std::to_string(sonar_rate_hz)};
-  if (frame_every < 0) return Error{"survey.frame_every must be >= 0, got " + std::to_string(frame_every)};
   if (!(max_duration_s > 0.0) || !std::isfinite(max_duration_s))
     return Error{"survey.max_duration_s must be finite and > 0, got " + std::to_string(max_duration_s)};
   if (!(waypoint_timeout_factor >= 1.0) || !std::isfinite(waypoint_timeout_factor))
     return Error{"survey.waypoint_timeout_factor must be finite and >= 1, got " + std::to_string(waypoint_timeout_factor)};
-  if (auto st = vehicle.validate(); !st) return st;
-  if (auto st = sonar.validate(); !st) return st;
-  if (auto st = nav.validate(); !st) return st;
-  if (auto st = odometry.validate(); !st) return st;
-  for (const double r : {nav.dvl_rate_hz, nav.imu_rate_hz, nav.depth_rate_hz})
-    if (r > odometry.rate_hz) return Error{"nav rates must not exceed odometry.rate_hz (the simulation step rate)"};
-  return {};
+  return LockstepConfig::validate();
 }
 
 namespace {
@@ -107,6 +98,72 @@ std::string yamlDouble(double v) {
   return b;
 }
 
+// Writes every stream of a lockstep run to the survey's CSV files and frames.bin.
+struct CsvSink final : SimulationSink {
+  CsvSink(const std::filesystem::path& dir, int n_beams, const char* pose_cols)
+      : gt(dir / "ground_truth.csv", (std::string("stamp_ns,") + pose_cols).c_str()),
+        od(dir / "odometry.csv", (std::string("stamp_ns,") + pose_cols).c_str()),
+        sc(dir / "scans.csv", scanHeader(n_beams).c_str()),
+        sp(dir / "scan_poses.csv",
+           "scan_index,stamp_ns,true_x_m,true_y_m,true_z_m,true_roll_rad,true_pitch_rad,true_yaw_rad,"
+           "odom_x_m,odom_y_m,odom_z_m,odom_roll_rad,odom_pitch_rad,odom_yaw_rad"),
+        dv(dir / "dvl.csv", "stamp_ns,bottom_lock,vx_mps,vy_mps,vz_mps,altitude_m"),
+        im(dir / "imu.csv", "stamp_ns,roll_rad,pitch_rad,yaw_rad,wx_radps,wy_radps,wz_radps"),
+        de(dir / "depth.csv", "stamp_ns,depth_m"),
+        ev(dir / "events.csv", "stamp_ns,event,waypoint_index,x_m,y_m,z_m"),
+        frames(dir / "frames.bin", std::ios::binary | std::ios::trunc) {}
+
+  static std::string scanHeader(int n_beams) {
+    std::string h = "stamp_ns,scan_index";
+    for (int b = 0; b < n_beams; ++b) h += ",r" + std::to_string(b) + "_m";
+    return h;
+  }
+
+  void truth(const VehicleState& s, const geometry::Pose3& T_odom) override {
+    std::fprintf(gt.get(), "%lld", static_cast<long long>(s.stamp_ns));
+    writePose(gt.get(), s.T_world_vehicle());
+    std::fputc('\n', gt.get());
+    std::fprintf(od.get(), "%lld", static_cast<long long>(s.stamp_ns));
+    writePose(od.get(), T_odom);
+    std::fputc('\n', od.get());
+  }
+  void imu(const ImuSample& m) override {
+    std::fprintf(im.get(), "%lld,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", static_cast<long long>(m.stamp_ns), m.rpy_rad.x(),
+                 m.rpy_rad.y(), m.rpy_rad.z(), m.angular_rate_vehicle_radps.x(), m.angular_rate_vehicle_radps.y(),
+                 m.angular_rate_vehicle_radps.z());
+  }
+  void dvl(const DvlSample& m) override {
+    std::fprintf(dv.get(), "%lld,%d,%.9g,%.9g,%.9g,%.9g\n", static_cast<long long>(m.stamp_ns), m.bottom_lock ? 1 : 0,
+                 m.velocity_vehicle_mps.x(), m.velocity_vehicle_mps.y(), m.velocity_vehicle_mps.z(), m.altitude_m);
+  }
+  void depth(const DepthSample& m) override {
+    std::fprintf(de.get(), "%lld,%.9g\n", static_cast<long long>(m.stamp_ns), m.depth_m);
+  }
+  void scan(std::uint32_t idx, const SonarPing& p, const geometry::Pose3& T_true, const geometry::Pose3& T_odom) override {
+    std::fprintf(sc.get(), "%lld,%u", static_cast<long long>(p.scan.stamp_ns), idx);
+    for (const float r : p.scan.range_m) std::fprintf(sc.get(), ",%.9g", static_cast<double>(r));
+    std::fputc('\n', sc.get());
+    std::fprintf(sp.get(), "%u,%lld", idx, static_cast<long long>(p.scan.stamp_ns));
+    writePose(sp.get(), T_true);
+    writePose(sp.get(), T_odom);
+    std::fputc('\n', sp.get());
+    if (p.frame.n_samples > 0) {
+      const std::string bytes = encodeFrame(p.frame, idx);
+      frames.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    }
+  }
+  Status close(const std::filesystem::path& dir) {
+    frames.close();
+    if (!frames) return Error{"error while writing " + (dir / "frames.bin").string()};
+    for (CsvFile* f : {&gt, &od, &sc, &sp, &dv, &im, &de, &ev})
+      if (auto st = f->close(); !st) return st.error();
+    return {};
+  }
+
+  CsvFile gt, od, sc, sp, dv, im, de, ev;
+  std::ofstream frames;
+};
+
 }  // namespace
 
 Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>& waypoints, const SurveyConfig& config,
@@ -117,51 +174,24 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
   std::filesystem::create_directories(out_dir, ec);
   if (ec) return Error{"cannot create output directory " + out_dir.string() + ": " + ec.message()};
 
-  const Scene& scene = world.scene();
-  const Eigen::Vector3d start = scene.T_world_start.translation();
-  auto vehicle_r = VehicleModel::create(world, config.vehicle, start, geometry::yawOf(scene.T_world_start.linear()), 0);
-  if (!vehicle_r) return vehicle_r.error();
-  VehicleModel vehicle = std::move(vehicle_r).value();
+  auto sim_r = LockstepSimulation::create(world, config);
+  if (!sim_r) return sim_r.error();
+  LockstepSimulation sim = std::move(sim_r).value();
+  VehicleModel& vehicle = sim.vehicle();
   if (auto st = vehicle.setWaypoints(waypoints); !st) return st.error();
-  auto sonar_r = SonarModel::create(world, config.sonar, config.seed);
-  if (!sonar_r) return sonar_r.error();
-  SonarModel sonar = std::move(sonar_r).value();
-  auto nav_r = NavSensorModel::create(world, config.nav, config.seed);
-  if (!nav_r) return nav_r.error();
-  NavSensorModel nav = std::move(nav_r).value();
-  auto odom_r = OdometryCorruptor::create(config.odometry, config.seed);
-  if (!odom_r) return odom_r.error();
-  OdometryCorruptor odom = std::move(odom_r).value();
+  const Scene& scene = world.scene();
 
   const char* pose_cols = "x_m,y_m,z_m,roll_rad,pitch_rad,yaw_rad";
-  CsvFile gt(out_dir / "ground_truth.csv", (std::string("stamp_ns,") + pose_cols).c_str());
-  CsvFile od(out_dir / "odometry.csv", (std::string("stamp_ns,") + pose_cols).c_str());
-  std::string scan_header = "stamp_ns,scan_index";
-  for (int b = 0; b < config.sonar.fan.n_beams; ++b) scan_header += ",r" + std::to_string(b) + "_m";
-  CsvFile sc(out_dir / "scans.csv", scan_header.c_str());
-  CsvFile sp(out_dir / "scan_poses.csv",
-             "scan_index,stamp_ns,true_x_m,true_y_m,true_z_m,true_roll_rad,true_pitch_rad,true_yaw_rad,"
-             "odom_x_m,odom_y_m,odom_z_m,odom_roll_rad,odom_pitch_rad,odom_yaw_rad");
-  CsvFile dv(out_dir / "dvl.csv", "stamp_ns,bottom_lock,vx_mps,vy_mps,vz_mps,altitude_m");
-  CsvFile im(out_dir / "imu.csv", "stamp_ns,roll_rad,pitch_rad,yaw_rad,wx_radps,wy_radps,wz_radps");
-  CsvFile de(out_dir / "depth.csv", "stamp_ns,depth_m");
-  CsvFile ev(out_dir / "events.csv", "stamp_ns,event,waypoint_index,x_m,y_m,z_m");
-  std::ofstream frames(out_dir / "frames.bin", std::ios::binary | std::ios::trunc);
-  if (!frames) return Error{"cannot write " + (out_dir / "frames.bin").string()};
-
-  const auto period = [](double hz) { return static_cast<std::int64_t>(std::llround(1e9 / hz)); };
-  const std::int64_t dt_ns = period(config.odometry.rate_hz);
-  const std::int64_t sonar_ns = period(config.sonar_rate_hz), dvl_ns = period(config.nav.dvl_rate_hz);
-  const std::int64_t imu_ns = period(config.nav.imu_rate_hz), depth_ns = period(config.nav.depth_rate_hz);
-  std::int64_t next_sonar = 0, next_dvl = 0, next_imu = 0, next_depth = 0;
+  CsvSink sink(out_dir, config.sonar.fan.n_beams, pose_cols);
+  if (!sink.frames) return Error{"cannot write " + (out_dir / "frames.bin").string()};
   const auto max_ns = static_cast<std::int64_t>(config.max_duration_s * 1e9);
 
   SurveySummary sum;
   const int n_waypoints = static_cast<int>(waypoints.size());
   auto event = [&](const char* what, int index) {
     const Eigen::Vector3d p = vehicle.state().xyz_world;
-    std::fprintf(ev.get(), "%lld,%s,%d,%.9g,%.9g,%.9g\n", static_cast<long long>(vehicle.state().stamp_ns), what, index,
-                 p.x(), p.y(), p.z());
+    std::fprintf(sink.ev.get(), "%lld,%s,%d,%.9g,%.9g,%.9g\n", static_cast<long long>(vehicle.state().stamp_ns), what,
+                 index, p.x(), p.y(), p.z());
   };
   auto frontIndex = [&] { return n_waypoints - static_cast<int>(vehicle.waypointsLeft()); };
   auto legDeadline = [&]() -> std::int64_t {
@@ -172,56 +202,7 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
     return vehicle.state().stamp_ns + static_cast<std::int64_t>((config.waypoint_timeout_factor * t_leg + 30.0) * 1e9);
   };
 
-  auto record = [&](const geometry::Pose3& T_odom) {
-    const VehicleState& s = vehicle.state();
-    const geometry::Pose3 T_true = s.T_world_vehicle();
-    std::fprintf(gt.get(), "%lld", static_cast<long long>(s.stamp_ns));
-    writePose(gt.get(), T_true);
-    std::fputc('\n', gt.get());
-    std::fprintf(od.get(), "%lld", static_cast<long long>(s.stamp_ns));
-    writePose(od.get(), T_odom);
-    std::fputc('\n', od.get());
-    if (s.stamp_ns >= next_imu) {
-      const ImuSample m = nav.imu(s);
-      std::fprintf(im.get(), "%lld,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", static_cast<long long>(m.stamp_ns), m.rpy_rad.x(),
-                   m.rpy_rad.y(), m.rpy_rad.z(), m.angular_rate_vehicle_radps.x(), m.angular_rate_vehicle_radps.y(),
-                   m.angular_rate_vehicle_radps.z());
-      next_imu += imu_ns;
-    }
-    if (s.stamp_ns >= next_dvl) {
-      const DvlSample m = nav.dvl(s);
-      std::fprintf(dv.get(), "%lld,%d,%.9g,%.9g,%.9g,%.9g\n", static_cast<long long>(m.stamp_ns), m.bottom_lock ? 1 : 0,
-                   m.velocity_vehicle_mps.x(), m.velocity_vehicle_mps.y(), m.velocity_vehicle_mps.z(), m.altitude_m);
-      next_dvl += dvl_ns;
-    }
-    if (s.stamp_ns >= next_depth) {
-      const DepthSample m = nav.depth(s);
-      std::fprintf(de.get(), "%lld,%.9g\n", static_cast<long long>(m.stamp_ns), m.depth_m);
-      next_depth += depth_ns;
-    }
-    if (s.stamp_ns >= next_sonar) {
-      const auto idx = static_cast<std::uint32_t>(sum.n_scans);
-      const bool with_frame = config.frame_every > 0 && idx % static_cast<std::uint32_t>(config.frame_every) == 0;
-      const SonarPing p = sonar.ping(T_true, s.stamp_ns, with_frame, static_cast<std::uint32_t>(sum.n_frames));
-      std::fprintf(sc.get(), "%lld,%u", static_cast<long long>(s.stamp_ns), idx);
-      for (const float r : p.scan.range_m) std::fprintf(sc.get(), ",%.9g", static_cast<double>(r));
-      std::fputc('\n', sc.get());
-      std::fprintf(sp.get(), "%u,%lld", idx, static_cast<long long>(s.stamp_ns));
-      writePose(sp.get(), T_true);
-      writePose(sp.get(), T_odom);
-      std::fputc('\n', sp.get());
-      if (with_frame) {
-        const std::string bytes = encodeFrame(p.frame, idx);
-        frames.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        ++sum.n_frames;
-      }
-      ++sum.n_scans;
-      next_sonar += sonar_ns;
-    }
-  };
-
-  odom.reset(vehicle.state().T_world_vehicle());
-  record(vehicle.state().T_world_vehicle());  // P^_1 = P_1 (thesis Eq. 4.1)
+  sim.start(sink);
   std::int64_t deadline = legDeadline();
   int front = frontIndex();
   while (vehicle.waypointsLeft() > 0) {
@@ -229,9 +210,7 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
       event("time_limit", frontIndex());
       break;
     }
-    const Eigen::Vector3d before = vehicle.state().xyz_world;
-    const StepResult r = vehicle.step(dt_ns);
-    sum.path_length_m += (vehicle.state().xyz_world - before).norm();
+    const StepResult r = sim.step(sink);
     for (int k = 0; k < r.waypoints_reached; ++k) event("reached", front + k);
     sum.waypoints_reached += r.waypoints_reached;
     if (r.status == MotionStatus::kBlocked || (vehicle.waypointsLeft() > 0 && vehicle.state().stamp_ns > deadline &&
@@ -245,16 +224,15 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
       front = frontIndex();
       deadline = legDeadline();
     }
-    record(odom.step(vehicle.state().T_world_vehicle()));
   }
   if (vehicle.waypointsLeft() == 0) event("done", n_waypoints);
+  sum.n_scans = sim.scanCount();
+  sum.n_frames = sim.frameCount();
+  sum.path_length_m = sim.pathLengthM();
   sum.duration_s = static_cast<double>(vehicle.state().stamp_ns) * 1e-9;
   sum.collisions_refused = vehicle.collisionCount();
 
-  frames.close();
-  if (!frames) return Error{"error while writing " + (out_dir / "frames.bin").string()};
-  for (CsvFile* f : {&gt, &od, &sc, &sp, &dv, &im, &de, &ev})
-    if (auto st = f->close(); !st) return st.error();
+  if (auto st = sink.close(out_dir); !st) return st.error();
 
   // meta.yaml: everything needed to interpret and reproduce the run.
   std::ofstream meta(out_dir / "meta.yaml", std::ios::trunc);

@@ -5,6 +5,7 @@
 
 #include "vog/geometry/result.hpp"
 #include "vog/geometry/sonar.hpp"
+#include "vog/sim/lockstep.hpp"
 #include "vog/sim/nav_model.hpp"
 #include "vog/sim/sonar_model.hpp"
 #include "vog/sim/vehicle.hpp"
@@ -18,17 +19,11 @@
 
 namespace vog::sim {
 
-struct SurveyConfig {
-  std::uint64_t seed = 1;
-  double sonar_rate_hz = 5.0;        // thesis Table 4.2, FPS_sensor
-  int frame_every = 1;               // record the intensity frame of every n-th scan; 0 = none
+// The lockstep simulation's settings plus the survey's own limits.
+struct SurveyConfig : LockstepConfig {
   double max_duration_s = 3600.0;    // simulated time limit
   // A waypoint not reached within factor * (nominal leg time) + 30 s is skipped and reported.
   double waypoint_timeout_factor = 3.0;
-  VehicleConfig vehicle;
-  SonarModelConfig sonar;
-  NavSensorConfig nav;
-  OdometryNoiseConfig odometry;      // its rate is also the simulation step rate
 
   Status validate() const;
 };
