@@ -8,10 +8,8 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
-#include <deque>
-#include <vector>
 
-#include "supervisor.hpp"
+#include "stream_link.hpp"
 
 namespace vog::io {
 namespace {
@@ -42,37 +40,27 @@ Status SerialConfig::validate(const std::string& prefix) const {
   return reconnect.validate(prefix + ".reconnect");
 }
 
-class SerialTransport::Impl final : public detail::Supervisor {
+class SerialTransport::Impl final : public detail::StreamLink<asio::serial_port> {
  public:
   Impl(asio::io_context& io, SerialConfig config, StampClock clock, ByteHandler on_bytes, StateHandler on_state)
-      : Supervisor(io, config.reconnect, std::move(clock), std::move(on_state)),
-        config_(std::move(config)),
-        on_bytes_(std::move(on_bytes)),
-        port_(io),
-        buffer_(config_.read_chunk_bytes) {}
+      : StreamLink(io, config.reconnect, std::move(clock), std::move(on_state), std::move(on_bytes),
+                   config.read_chunk_bytes),
+        config_(std::move(config)) {}
 
   const SerialConfig& config() const { return config_; }
 
-  Status write(std::span<const std::uint8_t> bytes) {
-    if (!connected()) return Error{"serial " + config_.device_path + ": not connected (" + health().reason + ")"};
-    queue_.emplace_back(bytes.begin(), bytes.end());
-    if (queue_.size() == 1) writeNext(generation());
-    return Status::success();
-  }
-
  protected:
+  std::string linkName() const override { return "serial " + config_.device_path; }
+
   void asyncOpen(OpenDone done) override {
-    queue_.clear();
+    clearQueue();
     done(open());
   }
 
-  void onOpened() override { readNext(generation()); }
-
   void closeLink() override {
     std::error_code ignored;
-    port_.cancel(ignored);
-    port_.close(ignored);
-    // queue_ is cleared on the next open, not here: a cancelled write may still hold its buffer.
+    stream_.cancel(ignored);
+    stream_.close(ignored);
   }
 
  private:
@@ -105,7 +93,7 @@ class SerialTransport::Impl final : public detail::Supervisor {
       return Error{msg};
     }
     std::error_code ec;
-    port_.assign(fd, ec);
+    stream_.assign(fd, ec);
     if (ec) {
       ::close(fd);
       return Error{"assign " + path + ": " + ec.message()};
@@ -115,14 +103,14 @@ class SerialTransport::Impl final : public detail::Supervisor {
                                     : config_.parity == Parity::kOdd ? SP::parity::odd
                                                                      : SP::parity::even;
     const char* option = "baud rate";
-    port_.set_option(SP::baud_rate(config_.baud), ec);
-    if (!ec) option = "parity", port_.set_option(SP::parity(parity), ec);
-    if (!ec) option = "data bits", port_.set_option(SP::character_size(static_cast<unsigned>(config_.data_bits)), ec);
+    stream_.set_option(SP::baud_rate(config_.baud), ec);
+    if (!ec) option = "parity", stream_.set_option(SP::parity(parity), ec);
+    if (!ec) option = "data bits", stream_.set_option(SP::character_size(static_cast<unsigned>(config_.data_bits)), ec);
     if (!ec) {
       option = "stop bits";
-      port_.set_option(SP::stop_bits(config_.stop_bits == 1 ? SP::stop_bits::one : SP::stop_bits::two), ec);
+      stream_.set_option(SP::stop_bits(config_.stop_bits == 1 ? SP::stop_bits::one : SP::stop_bits::two), ec);
     }
-    if (!ec) option = "flow control", port_.set_option(SP::flow_control(SP::flow_control::none), ec);
+    if (!ec) option = "flow control", stream_.set_option(SP::flow_control(SP::flow_control::none), ec);
     if (ec) return Error{"configure " + path + " " + option + ": " + ec.message()};
     // tcsetattr succeeds when any one of the requested changes was made (POSIX), so read the
     // settings back: a driver that silently kept other framing must not look connected.
@@ -152,41 +140,7 @@ class SerialTransport::Impl final : public detail::Supervisor {
     return Status::success();
   }
 
-  void readNext(std::uint64_t gen) {
-    port_.async_read_some(asio::buffer(buffer_), [self = selfPtr(), gen](const std::error_code& ec, std::size_t n) {
-      if (!self->isCurrent(gen)) return;
-      if (ec) {
-        // EOF or EIO: the other end of the line went away (pty master closed, adapter unplugged).
-        self->linkLost("serial " + self->config_.device_path + " read: " + ec.message());
-        return;
-      }
-      const std::int64_t stamp_ns = self->now_ns();
-      self->noteRx(n, 0, stamp_ns);
-      if (self->on_bytes_) self->on_bytes_(std::span<const std::uint8_t>(self->buffer_.data(), n), stamp_ns);
-      if (self->isCurrent(gen)) self->readNext(gen);
-    });
-  }
-
-  void writeNext(std::uint64_t gen) {
-    asio::async_write(port_, asio::buffer(queue_.front()), [self = selfPtr(), gen](const std::error_code& ec, std::size_t n) {
-      if (!self->isCurrent(gen)) return;
-      if (ec) {
-        self->linkLost("serial " + self->config_.device_path + " write: " + ec.message());
-        return;
-      }
-      self->noteTx(n, 0);
-      self->queue_.pop_front();
-      if (!self->queue_.empty()) self->writeNext(gen);
-    });
-  }
-
-  std::shared_ptr<Impl> selfPtr() { return std::static_pointer_cast<Impl>(shared_from_this()); }
-
   SerialConfig config_;
-  ByteHandler on_bytes_;
-  asio::serial_port port_;
-  std::vector<std::uint8_t> buffer_;
-  std::deque<std::vector<std::uint8_t>> queue_;
 };
 
 SerialTransport::SerialTransport(asio::io_context& io, SerialConfig config, StampClock clock, ByteHandler on_bytes,

@@ -1,9 +1,9 @@
 #include "vog/io/tcp_client.hpp"
 
-#include <deque>
-#include <vector>
+#include <chrono>
+#include <string>
 
-#include "supervisor.hpp"
+#include "stream_link.hpp"
 
 namespace vog::io {
 
@@ -21,28 +21,25 @@ Status TcpClientConfig::validate(const std::string& prefix) const {
   return reconnect.validate(prefix + ".reconnect");
 }
 
-class TcpClient::Impl final : public detail::Supervisor {
+class TcpClient::Impl final : public detail::StreamLink<asio::ip::tcp::socket> {
  public:
   Impl(asio::io_context& io, TcpClientConfig config, StampClock clock, ByteHandler on_bytes, StateHandler on_state)
-      : Supervisor(io, config.reconnect, std::move(clock), std::move(on_state)),
+      : StreamLink(io, config.reconnect, std::move(clock), std::move(on_state), std::move(on_bytes),
+                   config.read_chunk_bytes),
         config_(std::move(config)),
-        on_bytes_(std::move(on_bytes)),
-        socket_(io),
-        connect_timer_(io),
-        buffer_(config_.read_chunk_bytes) {}
+        connect_timer_(io) {}
 
   const TcpClientConfig& config() const { return config_; }
 
-  Status write(std::span<const std::uint8_t> bytes) {
-    if (!connected()) return Error{"tcp " + endpointText() + ": not connected (" + health().reason + ")"};
-    queue_.emplace_back(bytes.begin(), bytes.end());
-    if (queue_.size() == 1) writeNext(generation());
-    return Status::success();
+ protected:
+  std::string linkName() const override { return "tcp " + endpointText(); }
+
+  std::string readErrorText(const std::error_code& ec) const override {
+    return ec == asio::error::eof ? std::string("connection closed by peer") : ec.message();
   }
 
- protected:
   void asyncOpen(OpenDone done) override {
-    queue_.clear();
+    clearQueue();
     const asio::ip::tcp::endpoint ep(asio::ip::make_address(config_.address), config_.port);
     const std::uint64_t gen = generation();
     auto self = std::static_pointer_cast<Impl>(shared_from_this());
@@ -50,12 +47,12 @@ class TcpClient::Impl final : public detail::Supervisor {
     connect_timer_.async_wait([self, gen](const std::error_code& ec) {
       if (!ec && self->isCurrent(gen)) {
         std::error_code ignored;
-        self->socket_.close(ignored);  // completes the connect with operation_aborted
+        self->stream_.close(ignored);  // completes the connect with operation_aborted
         self->timed_out_ = true;
       }
     });
     timed_out_ = false;
-    socket_.async_connect(ep, [self, gen, done = std::move(done)](const std::error_code& ec) {
+    stream_.async_connect(ep, [self, gen, done = std::move(done)](const std::error_code& ec) {
       if (!self->isCurrent(gen)) return;
       self->connect_timer_.cancel();
       if (ec) {
@@ -64,61 +61,23 @@ class TcpClient::Impl final : public detail::Supervisor {
         return;
       }
       std::error_code ignored;
-      self->socket_.set_option(asio::ip::tcp::no_delay(true), ignored);
+      self->stream_.set_option(asio::ip::tcp::no_delay(true), ignored);
       done(Status::success());
     });
   }
 
-  void onOpened() override { readNext(generation()); }
-
   void closeLink() override {
     std::error_code ignored;
     connect_timer_.cancel();
-    socket_.close(ignored);
-    // queue_ is cleared on the next open, not here: a cancelled write may still hold its buffer.
+    stream_.close(ignored);
   }
 
  private:
   std::string endpointText() const { return config_.address + ":" + std::to_string(config_.port); }
 
-  void readNext(std::uint64_t gen) {
-    socket_.async_read_some(asio::buffer(buffer_), [self = std::static_pointer_cast<Impl>(shared_from_this()), gen](
-                                                       const std::error_code& ec, std::size_t n) {
-      if (!self->isCurrent(gen)) return;
-      if (ec) {
-        self->linkLost("tcp " + self->endpointText() + " read: " +
-                       (ec == asio::error::eof ? std::string("connection closed by peer") : ec.message()));
-        return;
-      }
-      const std::int64_t stamp_ns = self->now_ns();
-      self->noteRx(n, 0, stamp_ns);
-      if (self->on_bytes_) self->on_bytes_(std::span<const std::uint8_t>(self->buffer_.data(), n), stamp_ns);
-      if (self->isCurrent(gen)) self->readNext(gen);
-    });
-  }
-
-  void writeNext(std::uint64_t gen) {
-    asio::async_write(socket_, asio::buffer(queue_.front()),
-                      [self = std::static_pointer_cast<Impl>(shared_from_this()), gen](const std::error_code& ec,
-                                                                                        std::size_t n) {
-                        if (!self->isCurrent(gen)) return;
-                        if (ec) {
-                          self->linkLost("tcp " + self->endpointText() + " write: " + ec.message());
-                          return;
-                        }
-                        self->noteTx(n, 0);
-                        self->queue_.pop_front();
-                        if (!self->queue_.empty()) self->writeNext(gen);
-                      });
-  }
-
   TcpClientConfig config_;
-  ByteHandler on_bytes_;
-  asio::ip::tcp::socket socket_;
   asio::steady_timer connect_timer_;
   bool timed_out_ = false;
-  std::vector<std::uint8_t> buffer_;
-  std::deque<std::vector<std::uint8_t>> queue_;
 };
 
 TcpClient::TcpClient(asio::io_context& io, TcpClientConfig config, StampClock clock, ByteHandler on_bytes,
