@@ -72,6 +72,8 @@ Status DeadReckoningConfig::validate(const std::string& prefix) const {
   }
   Status s = nonNegative(dvl_velocity_sigma_mps, "dvl_velocity_sigma_mps");
   if (!s.ok()) return s;
+  s = nonNegative(heading_drift_rad2_per_s, "heading_drift_rad2_per_s");
+  if (!s.ok()) return s;
   return nonNegative(heading_sigma_rad, "heading_sigma_rad");
 }
 
@@ -208,7 +210,11 @@ Status DeadReckoning::addDvl(const dvl::BottomVelocity& velocity) {
   if (last_dvl_ns_ >= 0) {
     // Trapezoidal integration between consecutive accepted samples.
     const double dt_s = seconds(velocity.stamp_ns - last_dvl_ns_);
+    const Eigen::Vector2d xy_before = xy_m_;
     xy_m_ += 0.5 * dt_s * (v_world_mps_.head<2>() + v_world.head<2>());
+    path_s0_s_ += dt_s;
+    path_s1_ += 0.5 * dt_s * (xy_before + xy_m_);
+    path_s2_ += 0.5 * dt_s * (xy_before.squaredNorm() + xy_m_.squaredNorm());
     // White velocity noise and white heading noise of each sample, integrated over dt (random walk).
     const double speed = v_world.head<2>().norm();
     variance_m2_ += dt_s * dt_s *
@@ -224,6 +230,9 @@ Status DeadReckoning::addDvl(const dvl::BottomVelocity& velocity) {
 void DeadReckoning::resetPosition(double x_m, double y_m) {
   xy_m_ = Eigen::Vector2d(x_m, y_m);
   variance_m2_ = 0.0;
+  path_s0_s_ = 0.0;
+  path_s1_ = Eigen::Vector2d::Zero();
+  path_s2_ = 0.0;
 }
 
 NavSolution DeadReckoning::solution(std::int64_t now_ns) const {
@@ -253,7 +262,10 @@ NavSolution DeadReckoning::solution(std::int64_t now_ns) const {
   if (!attitudes_.empty()) s.T_world_vehicle.linear() = attitudes_.back().q_world_vehicle.normalized().toRotationMatrix();
   s.T_world_vehicle.translation() = Eigen::Vector3d(xy_m_.x(), xy_m_.y(), -depth_m_);  // z up, depth down
   s.velocity_world_mps = v_world_mps_;
-  s.position_sigma_m = std::sqrt(variance_m2_);
+  // Per axis: half of the drift term (it spreads over both axes).
+  const double drift_m2 = 0.5 * config_.heading_drift_rad2_per_s *
+                          std::max(0.0, xy_m_.squaredNorm() * path_s0_s_ - 2.0 * xy_m_.dot(path_s1_) + path_s2_);
+  s.position_sigma_m = std::sqrt(variance_m2_ + drift_m2);
   return s;
 }
 

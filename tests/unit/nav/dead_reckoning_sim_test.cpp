@@ -211,6 +211,7 @@ DeadReckoningConfig deadReckoningConfigFor(const sim::NavSensorConfig& sensors) 
   DeadReckoningConfig c;
   c.dvl_velocity_sigma_mps = sensors.dvl_sigma_mps;
   c.heading_sigma_rad = sensors.imu_yaw_sigma_rad;
+  c.heading_drift_rad2_per_s = sensors.imu_yaw_drift_rad2ps;
   return c;
 }
 
@@ -342,12 +343,14 @@ TEST(DeadReckoningSimTest, LawnmowerSurveyStaysWithinTheDriftTheNoiseModelPredic
   RecordProperty("solution_sigma_m", std::to_string(last.solution.position_sigma_m));
   // The sampling part stays small next to the noise part, or the bound would mostly test it.
   EXPECT_LT(last.sampling_error_m, last.predicted_sigma_m);
-  // The solution's own sigma (per axis) is of the order of the predicted per-axis drift and of the
-  // observed error: within 10x of the prediction, within 100x of the (random) observation.
+  // The solution's own sigma (per axis) models the same three noise sources as the prediction (its
+  // heading-drift term from the path moments, the white terms per DVL sample), so it agrees with the
+  // predicted per-axis drift within a factor 1.5 (measured: 0.997); and it is of the order of the (random) observed
+  // error: within 100x.
   const double per_axis_predicted = last.predicted_sigma_m / std::sqrt(2.0);
   const double per_axis_observed = last.error_xy_m.norm() / std::sqrt(2.0);
-  EXPECT_GT(last.solution.position_sigma_m, per_axis_predicted / 10.0);
-  EXPECT_LT(last.solution.position_sigma_m, per_axis_predicted * 10.0);
+  EXPECT_GT(last.solution.position_sigma_m, per_axis_predicted / 1.5);
+  EXPECT_LT(last.solution.position_sigma_m, per_axis_predicted * 1.5);
   EXPECT_GT(last.solution.position_sigma_m, per_axis_observed / 100.0);
   EXPECT_LT(last.solution.position_sigma_m, per_axis_observed * 100.0);
   EXPECT_EQ(last.solution.dvl_used, static_cast<std::uint64_t>(last.stamp_ns / 200'000'000 + 1));

@@ -42,10 +42,12 @@ struct DeadReckoningConfig {
   double max_error_velocity_mps = 0.2;
   // Plausibility bound of a bottom velocity; the HAUV moves at most 0.25 m/s (thesis Table 4.2).
   double max_speed_mps = 3.0;
-  // Noise model for the reported position sigma: white DVL velocity noise per axis and white
-  // heading noise of the attitude used to rotate each sample.
+  // Noise model for the reported position sigma: white DVL velocity noise per axis, white
+  // heading noise of the attitude used to rotate each sample, and the heading's random-walk drift
+  // (variance per second; thesis 4.4.1 sigma_psi^2).
   double dvl_velocity_sigma_mps = 0.005;
   double heading_sigma_rad = 0.002;
+  double heading_drift_rad2_per_s = 1e-7;
 
   Status validate(const std::string& prefix = "nav") const;
 };
@@ -104,7 +106,13 @@ class DeadReckoning {
   double depth_m_ = 0.0;
   Eigen::Vector2d xy_m_ = Eigen::Vector2d::Zero();
   Eigen::Vector3d v_world_mps_ = Eigen::Vector3d::Zero();
-  double variance_m2_ = 0.0;
+  double variance_m2_ = 0.0;  // white parts, per axis
+  // Heading drift: a yaw error that is a random walk of rate q turns the path behind the vehicle, so
+  // the position error at T has variance q * integral |p(T) - p(t)|^2 dt (both axes together), kept
+  // as the moments of the path since the last reset: integral dt, integral p dt, integral |p|^2 dt.
+  double path_s0_s_ = 0.0;
+  Eigen::Vector2d path_s1_ = Eigen::Vector2d::Zero();
+  double path_s2_ = 0.0;
   std::uint64_t dvl_used_ = 0;
   std::uint64_t dvl_rejected_ = 0;
   std::uint64_t imu_rejected_ = 0;
