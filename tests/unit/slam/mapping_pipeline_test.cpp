@@ -97,13 +97,7 @@ Outcome runPipeline(LoopClosureMode mode, bool closures) {
     const geometry::Pose3 T_from = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.from)].first_stamp_ns)];
     const geometry::Pose3 T_to = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.to)].first_stamp_ns)];
     const geometry::Pose3 T_true = T_from.inverse() * T_to;
-    // Error within the constrained subspace: a partial closure (Alg. 8) keeps its degenerate directions
-    // at the prior and does not measure them; for p2p V_u spans x, y and yaw.
-    const Vector6d e = xyzRpyDifference(toXyzRpy(lc.T_from_to), toXyzRpy(T_true));
-    const Vector6d e_u = lc.factor.V_u.transpose() * (lc.factor.V_u * e);
-    const double dt = e_u.head<3>().norm();
-    const double dr = e_u.tail<3>().norm();
-    if (dt > 0.2 || dr > deg2rad(2.0)) ++out.wrong;
+    if (closureError(lc, T_true, 0.2, deg2rad(2.0)).wrong) ++out.wrong;
   }
   const LoopCloseStats& st = out.pipeline->loopStats();
   std::cout << toString(mode) << " closures=" << closures << " submaps=" << n << " tried=" << st.tried
