@@ -144,21 +144,11 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   double orbit_radius_m = 0.0;
   double margin_m = 1.0;
   double max_duration_s = 3600.0;
-  // The evaluation's settings (README "SLAM evaluation"): odometry as a random walk at a quarter of
-  // the thesis's Eq. 4.1 rates (0.14-0.33 m base-pose RMSE over five laps; the literal Eq. 4.1 drifts
-  // only a few centimetres), and loop-closure settings for the small clouds a profiling sonar gets of
-  // a propeller: ICP clouds at the map resolution instead of twice it (a submap sees 300-500 points
-  // instead of 100-170), a direction well-conditioned at 3 cm instead of 1 cm predicted stddev (with
-  // a few hundred points no translation reaches 1 cm), a fitness bound of 0.015 m^2 (registrations
-  // stuck between two blades ended at 0.02-0.03 m^2, correct ones at 0.002-0.012 m^2) and a 45 deg
-  // viewing-direction gate (consecutive laps' submaps are about 32 deg out of phase).
+  // Odometry: a random walk at a quarter of the thesis's Eq. 4.1 rates (0.14-0.33 m base-pose RMSE
+  // over five laps; the literal Eq. 4.1 drifts only a few centimetres). Mapping: library defaults.
   std::string noise_profile = "random_walk";
   double noise_scale = 0.25;
   int max_scans = 100;
-  double cloud_voxel_m = 0.095;
-  double max_direction_stddev = 0.03;
-  double max_fitness_m2 = 0.015;
-  double max_heading_difference_deg = 45.0;
   bool json = false;
   CLI::App app{"vog-bench slam"};
   app.add_option("--scene", scene_file, "scene YAML file");
@@ -171,12 +161,6 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   app.add_option("--noise-profile", noise_profile, "odometry noise: eq41 (thesis Eq. 4.1, literal) | random_walk");
   app.add_option("--noise-scale", noise_scale, "factor on the odometry noise variances")->check(CLI::Range(0.0, 1e3));
   app.add_option("--max-scans", max_scans, "scans per submap (thesis Table 4.2: 100)")->check(CLI::Range(2, 100000));
-  app.add_option("--cloud-voxel", cloud_voxel_m, "ICP cloud downsampling, m")->check(CLI::Range(0.01, 10.0));
-  app.add_option("--max-direction-stddev", max_direction_stddev, "degeneracy rule: well-conditioned stddev bound")
-      ->check(CLI::Range(1e-6, 10.0));
-  app.add_option("--max-fitness", max_fitness_m2, "ICP acceptance: mean squared distance, m^2")->check(CLI::Range(1e-6, 10.0));
-  app.add_option("--max-heading-difference", max_heading_difference_deg, "closure viewing-direction gate, deg")
-      ->check(CLI::Range(1.0, 180.0));
   app.add_flag("--json", json, "print JSON (the only output format)");
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
@@ -236,11 +220,6 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   // The reference: every scan at its ground-truth pose in one grid whose frame is the world.
   slam::MappingPipelineConfig base;
   base.builder.max_scans = max_scans;
-  base.builder.grid.cloud_voxel_m = cloud_voxel_m;
-  base.loop_closer.point_to_plane.max_direction_stddev = max_direction_stddev;
-  base.loop_closer.acceptance.max_fitness_m2 = max_fitness_m2;
-  base.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(max_heading_difference_deg);
-  if (auto st = base.validate(); !st) return fail(st.error().message);
   auto truth_grid = vog::map::LocalGrid::create(base.builder.grid);
   if (!truth_grid) return fail(truth_grid.error().message);
   for (const slam::ScanInput& in : run->inputs) {

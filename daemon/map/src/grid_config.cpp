@@ -29,8 +29,8 @@ Status GridConfig::validate() const {
   if (!(occupancy_threshold > clamp_min && occupancy_threshold < clamp_max))
     return Error{bad("occupancy_threshold", occupancy_threshold, "(clamp_min, clamp_max)")};
   if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) return Error{bad("max_range_m", max_range_m, "> 0")};
-  if (!(cloud_voxel_m >= resolution_m) || !std::isfinite(cloud_voxel_m))
-    return Error{bad("cloud_voxel_m", cloud_voxel_m, ">= resolution_m")};
+  if (!(cloud_voxel_m == 0.0 || cloud_voxel_m >= resolution_m) || !std::isfinite(cloud_voxel_m))
+    return Error{bad("cloud_voxel_m", cloud_voxel_m, "0 (= resolution_m) or >= resolution_m")};
   if (normal_neighbours < 3 || normal_neighbours > 100)
     return Error{bad("normal_neighbours", normal_neighbours, "[3, 100]")};
   // OctoMap addresses +-32768 voxels per axis; a ray must fit comfortably inside.

@@ -223,7 +223,7 @@ void LocalGrid::computeCloud() {
            static_cast<std::size_t>(k.z()) * 83492791u;
   };
   std::unordered_map<VoxelKey, Cell, decltype(hash)> cells(1024, hash);
-  const double inv_cell = 1.0 / config_.cloud_voxel_m;
+  const double inv_cell = 1.0 / config_.cloudVoxelM();
   const double occupied = config_.bounds().occupied;
   forEachLeaf([&](const Leaf& leaf) {
     if (static_cast<double>(leaf.log_odds) <= occupied) return;

@@ -34,12 +34,15 @@ struct GridConfig {
   double clamp_max = 0.971;
   double occupancy_threshold = 0.5;   // occupied when P > threshold
   double max_range_m = 11.0;          // beams integrate up to here; thesis Table 4.2 sensor d_max
-  double cloud_voxel_m = 0.19;        // downsampling of the cached occupied cloud (2 x resolution)
+  // Downsampling of the cached occupied cloud (ICP input); 0 = the resolution. A profiling sonar sees
+  // little of an object per submap, so registration needs every occupied voxel it has.
+  double cloud_voxel_m = 0.0;
   int normal_neighbours = 10;         // neighbours for the PCA normal of each cloud point
 
   // Names the first bad key and value, or is ok.
   Status validate() const;
 
+  double cloudVoxelM() const { return cloud_voxel_m > 0.0 ? cloud_voxel_m : resolution_m; }
   LogOddsBounds bounds() const { return {logOdds(clamp_min), logOdds(clamp_max), logOdds(occupancy_threshold)}; }
 };
 
