@@ -1,0 +1,105 @@
+#pragma once
+// Receding-horizon next-best-view planner (Bircher et al. 2016, as adapted in thesis 4.3 and 4.5.3-4.5.5).
+//
+// Each plan() call grows an RRT from the current pose inside the exploration box, through known free
+// space only (TraversabilityGrid). Sampling is constrained (thesis 4.5.3): a sample is either an x-y
+// point at the current depth (extended from the nearest tree node at that depth) or a depth at the
+// current x-y (extended from the nearest node on that vertical), and its heading differs from its
+// parent's by at most max_heading_change_rad. A node's value is
+//   value(n) = value(parent) + gain(parent -> n) * exp(-lambda * cost(root -> n))
+// with gain the sonar-fan gain swept along the edge (SonarGain) and cost the travel time (translation
+// at v_max and turning at the yaw rate, simultaneously) expressed in metres at v_max: Bircher's cost is
+// the path length, for which lambda = 0.5 per metre is tuned (thesis Table 4.2), and a turn on the spot
+// costs the distance the vehicle could have covered meanwhile. The first edge of the best branch is executed; the rest of that branch seeds the next
+// tree (re-checked against the newer map).
+//
+// Termination: when no node's value exceeds gain_threshold after growing to n_tol nodes, exploration is
+// complete and the planner returns a known-free path back to the home pose; when no collision-free
+// edge exists at all (or no way home), it reports kNoPath instead of looping.
+//
+// Lifecycle: create() with a config and the home (start) pose; then plan() with the newest snapshot
+// and the current pose, as often as needed. The planner only reads the snapshots it is given (it
+// never blocks a map writer); it keeps a traversability grid updated incrementally from successive
+// snapshots of one MergedMap writer (rebuilt when a snapshot is older than the last one), the seed
+// branch and its random generator. Results depend only on the config (seed), the snapshots and the
+// poses passed in. Not thread-safe: one planning thread owns it.
+
+#include "vog/map/merged_map.hpp"
+#include "vog/plan/planner_config.hpp"
+#include "vog/plan/sonar_gain.hpp"
+#include "vog/plan/traversability.hpp"
+
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace vog::plan {
+
+enum class PlanStatus { kExplore, kComplete, kNoPath };
+const char* toString(PlanStatus status);
+
+struct TreeNode {
+  Waypoint w;
+  int parent = -1;        // index in the tree; -1 for the root
+  double cost_m = 0.0;    // travel time from the root, in metres at v_max
+  double gain = 0.0;      // gain of the edge parent -> this node
+  double value = 0.0;     // Bircher 2016 Eq. 1 (see above)
+  bool seeded = false;    // re-inserted from the previous best branch
+};
+
+struct PlanResult {
+  PlanStatus status = PlanStatus::kNoPath;
+  // kExplore: the next waypoint (end of the best branch's first edge). kComplete: the path home,
+  // ending at the home pose. kNoPath: empty.
+  std::vector<Waypoint> waypoints;
+  std::vector<Waypoint> best_branch;  // kExplore: root .. best node
+  double best_value = 0.0;
+  double best_gain = 0.0;             // gain of the best node's own edge
+  int tree_size = 0;                  // nodes including the root
+  int samples = 0;                    // sampling attempts
+  std::uint64_t map_version = 0;
+  std::string reason;                 // why kComplete / kNoPath
+};
+
+class NbvPlanner {
+ public:
+  // Errors name the bad config key, or say the home pose is not finite or not inside the box.
+  static Result<std::unique_ptr<NbvPlanner>> create(const PlannerConfig& config, const Waypoint& home);
+
+  NbvPlanner(const NbvPlanner&) = delete;
+  NbvPlanner& operator=(const NbvPlanner&) = delete;
+
+  // One planning iteration on `snapshot` from `current`. Errors: null snapshot, non-finite pose, pose
+  // outside the exploration box, pose inside an occupied voxel, map of another resolution.
+  Result<PlanResult> plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current);
+
+  // The tree of the last plan() call (tests and plots).
+  const std::vector<TreeNode>& lastTree() const { return tree_; }
+  const PlannerConfig& config() const { return config_; }
+  const Waypoint& home() const { return home_; }
+  // The traversability grid of the last snapshot, if any.
+  const TraversabilityGrid* traversability() const { return grid_ ? &*grid_ : nullptr; }
+  // Travel time between two waypoints (translation at v_max and yaw at the yaw rate, simultaneously)
+  // times v_max: metres of path-length-equivalent cost.
+  double edgeCost(const Waypoint& a, const Waypoint& b) const;
+
+ private:
+  NbvPlanner(const PlannerConfig& config, const Waypoint& home);
+  Status syncTraversability(const map::MergedMap& map);
+  bool headingOk(const Waypoint& from, const Waypoint& to) const;
+  void addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded);
+  PlanResult goHome(const Waypoint& current, PlanResult result) const;
+
+  PlannerConfig config_;
+  Waypoint home_;
+  std::mt19937_64 rng_;
+  std::optional<TraversabilityGrid> grid_;
+  std::optional<SonarGain> gain_;
+  double resolution_m_ = 0.0;
+  std::vector<Waypoint> seed_branch_;  // best branch of the last call after its first edge
+  std::vector<TreeNode> tree_;
+};
+
+}  // namespace vog::plan

@@ -1,0 +1,58 @@
+#pragma once
+// Parameters of the next-best-view planner (thesis 4.3, 4.5.3-4.5.4 after Bircher et al. 2016).
+// Defaults are the propeller simulation's (thesis Table 4.2) unless marked as our choice.
+
+#include "vog/geometry/result.hpp"
+#include "vog/geometry/sonar.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <numbers>
+
+namespace vog::plan {
+
+// A vehicle waypoint: position in the world frame (z up) and heading. Roll and pitch are zero (the
+// HAUV hovers level).
+struct Waypoint {
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  double yaw_rad = 0.0;
+};
+
+struct PlannerConfig {
+  // Exploration bounding box (world frame). Thesis 4.4: 12 m x 7 m x 3.5 m around the propeller.
+  Eigen::Vector3d box_min_world_m{-6.0, -3.5, -3.5};
+  Eigen::Vector3d box_max_world_m{6.0, 3.5, 0.0};
+  // Full side lengths of the vehicle's collision box, centred on the vehicle (Table 4.2).
+  Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};
+  double planner_range_m = 5.0;           // d_max^planner (Table 4.2)
+  double lambda = 0.5;                    // gain discount per metre of path cost (Table 4.2)
+  double max_edge_m = 2.0;                // RRT max edge length (Table 4.2)
+  int n_max = 15;                         // tree size (Table 4.2, N_max)
+  // Bircher 2016's N_TOL: while no node has gain above the threshold the tree keeps growing up to
+  // this size before exploration is declared complete (our choice).
+  int n_tol = 60;
+  // Sampling attempts per plan call, so a boxed-in vehicle is reported, never looped on (our choice).
+  int max_samples = 600;
+  double max_heading_change_rad = std::numbers::pi / 2;  // thesis 4.5.3: 90 deg
+  double v_max_mps = 0.25;                // Table 4.2
+  double yaw_rate_radps = 0.15;           // Table 4.2, psi
+  // Thesis 4.5.3 two-step sampling: share of samples drawn in x-y at the current depth; the rest
+  // are drawn along z at the current x-y (our choice).
+  double xy_sample_share = 0.7;
+  // Gain per voxel by status (thesis 4.3.1: most gain on unknown space).
+  double gain_unknown = 1.0;
+  double gain_free = 0.0;
+  double gain_occupied = 0.0;
+  // Exploration is complete when no branch value exceeds this (in weighted voxels; our choice:
+  // a few voxels of unknown space are noise, not a region worth a detour).
+  double gain_threshold = 10.0;
+  std::uint64_t seed = 1;
+  // The sonar whose beams the gain casts; its max_range_m is replaced by planner_range_m.
+  geometry::SonarFan fan;
+
+  // Names the first bad key and its value, or is ok.
+  Status validate() const;
+};
+
+}  // namespace vog::plan

@@ -1,0 +1,104 @@
+#pragma once
+// Traversability of the exploration box for a box-shaped vehicle, from a MergedMap snapshot.
+//
+// A voxel is "safe" when a collision box centred anywhere inside it lies entirely in known free space
+// (unknown is not traversable, thesis 4.3.2). Computed by inflating every voxel that is not known
+// free by the box half-extents plus one voxel (r_i = floor(h_i / res) + 1 voxels per axis), with a
+// separable max filter: a box centred at p in voxel v overlaps only voxels within r_i of v, so "no
+// blocked voxel within r of v" is conservative (a colliding edge is never called free) and at most one
+// voxel per side stricter than the exact test.
+//
+// The grid covers the exploration box's voxels plus r on every side; outside it everything counts as
+// blocked. An edge is free when both ends lie in the exploration box and every voxel its centre line
+// crosses (Amanatides & Woo 1987 walk) is safe: the swept box is the union of boxes centred on the line.
+//
+// The grid also keeps every voxel's status (unknown / free / occupied, exactly as MergedMap::at
+// classifies it): a dense copy of the snapshot over the box that the gain's beam walks read at a
+// fraction of the cost of hashed block lookups.
+//
+// Lifecycle: built from one snapshot; update() catches up with a newer snapshot of the same MergedMap
+// writer by re-reading only the blocks changed or removed since the version it reflects and
+// recomputing the safe flags in the bounding box of those blocks dilated by r (the result equals a
+// rebuild from the newer snapshot; the cost never exceeds one). It holds
+// no reference to any snapshot. Not thread-safe: one planner owns one grid.
+
+#include "vog/geometry/result.hpp"
+#include "vog/map/merged_map.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <vector>
+
+namespace vog::plan {
+
+struct TraversabilityUpdate {
+  bool rebuilt = false;          // the snapshot was not a descendant: rebuilt from scratch
+  int blocks_read = 0;           // changed or removed map blocks that touch the grid
+  int blocks_recomputed = 0;     // 8^3 blocks in the box of recomputed safe flags
+};
+
+class TraversabilityGrid {
+ public:
+  // box: the exploration box (world frame); collision_box_m: full side lengths of the vehicle's box.
+  static Result<TraversabilityGrid> build(const map::MergedMap& map, const Eigen::AlignedBox3d& box_world,
+                                          const Eigen::Vector3d& collision_box_m);
+
+  // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot with an
+  // older version than the grid's, or of another resolution, gives an error (the caller rebuilds).
+  Result<TraversabilityUpdate> update(const map::MergedMap& newer);
+
+  // Is a collision box centred at p (world) inside the exploration box and in known free space?
+  bool isSafe(const Eigen::Vector3d& p_world) const;
+  bool isSafeKey(const map::VoxelKey& key) const;
+  // Is the collision box swept from a to b in known free space, with a and b in the exploration box?
+  bool edgeIsFree(const Eigen::Vector3d& a_world, const Eigen::Vector3d& b_world) const;
+  bool insideBox(const Eigen::Vector3d& p_world) const;
+  // Status of a voxel of the snapshot of mapVersion(); unknown outside the grid.
+  map::Occupancy status(const map::VoxelKey& key) const {
+    return grid_.contains(key) ? static_cast<map::Occupancy>(status_[indexOf(key)]) : map::Occupancy::kUnknown;
+  }
+
+  // A shortest 26-connected path of safe voxels from `from` to `to` (A*, Hart 1968), shortened by
+  // dropping waypoints while the direct edge stays free. Starts at `from`, ends at `to`; an error when
+  // either end is not safe or no path exists.
+  Result<std::vector<Eigen::Vector3d>> findPath(const Eigen::Vector3d& from_world, const Eigen::Vector3d& to_world) const;
+
+  // Dense status array (map::Occupancy per voxel, x fastest, then y, then z) over gridKeys().
+  const std::vector<std::uint8_t>& statusArray() const { return status_; }
+  const Eigen::Vector3i& gridSize() const { return size_; }
+
+  std::uint64_t mapVersion() const { return map_version_; }
+  double resolution() const { return resolution_; }
+  const map::KeyBox& gridKeys() const { return grid_; }
+  const Eigen::Vector3i& inflationVoxels() const { return r_; }
+  std::size_t safeCount() const;
+  // Exact equality of the safe flags (tests: incremental vs rebuild).
+  bool sameFlags(const TraversabilityGrid& other) const;
+
+ private:
+  TraversabilityGrid() = default;
+  std::size_t indexOf(const map::VoxelKey& k) const {
+    const map::VoxelKey d = k - grid_.min;
+    return static_cast<std::size_t>(d.x()) +
+           static_cast<std::size_t>(size_.x()) * (static_cast<std::size_t>(d.y()) +
+                                                   static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(d.z()));
+  }
+  // Copies the status of one map block (nullptr: entirely unknown) into status_.
+  void readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
+  // Recomputes safe_ inside `region` (clipped to the grid) from status_.
+  void recompute(map::KeyBox region);
+
+  double resolution_ = 0.0;
+  double inv_resolution_ = 0.0;
+  map::LogOddsBounds bounds_;
+  Eigen::AlignedBox3d box_world_;
+  map::KeyBox grid_;                 // inclusive keys covered by status_ and safe_
+  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
+  Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
+  std::vector<std::uint8_t> status_;  // map::Occupancy per voxel
+  std::vector<std::uint8_t> safe_;   // 1 = a box centred in this voxel is in known free space
+  std::uint64_t map_version_ = 0;
+};
+
+}  // namespace vog::plan

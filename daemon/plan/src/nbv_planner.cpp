@@ -1,0 +1,233 @@
+#include "vog/plan/nbv_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace vog::plan {
+
+namespace {
+
+std::string describe(const Eigen::Vector3d& p) {
+  std::ostringstream s;
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+bool inBox(const PlannerConfig& c, const Eigen::Vector3d& p) {
+  return (p.array() >= c.box_min_world_m.array()).all() && (p.array() <= c.box_max_world_m.array()).all();
+}
+
+std::string outsideBox(const char* what, const PlannerConfig& c, const Eigen::Vector3d& p) {
+  return std::string(what) + " " + describe(p) + " is outside the exploration box plan.box_min_world_m " +
+         describe(c.box_min_world_m) + " .. plan.box_max_world_m " + describe(c.box_max_world_m);
+}
+
+}  // namespace
+
+const char* toString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kExplore: return "explore";
+    case PlanStatus::kComplete: return "complete";
+    case PlanStatus::kNoPath: break;
+  }
+  return "no_path";
+}
+
+Result<std::unique_ptr<NbvPlanner>> NbvPlanner::create(const PlannerConfig& config, const Waypoint& home) {
+  if (Status s = config.validate(); !s.ok()) return s.error();
+  if (!home.p_world.allFinite() || !std::isfinite(home.yaw_rad))
+    return Error{"plan: home pose " + describe(home.p_world) + " yaw " + std::to_string(home.yaw_rad) + " is not finite"};
+  if (!inBox(config, home.p_world)) return Error{outsideBox("plan: home position", config, home.p_world)};
+  return std::unique_ptr<NbvPlanner>(new NbvPlanner(config, home));
+}
+
+NbvPlanner::NbvPlanner(const PlannerConfig& config, const Waypoint& home)
+    : config_(config), home_(home), rng_(config.seed) {}
+
+double NbvPlanner::edgeCost(const Waypoint& a, const Waypoint& b) const {
+  const double translate_s = (b.p_world - a.p_world).norm() / config_.v_max_mps;
+  const double turn_s = std::abs(geometry::wrapAngle(b.yaw_rad - a.yaw_rad)) / config_.yaw_rate_radps;
+  return config_.v_max_mps * std::max(translate_s, turn_s);
+}
+
+bool NbvPlanner::headingOk(const Waypoint& from, const Waypoint& to) const {
+  return std::abs(geometry::wrapAngle(to.yaw_rad - from.yaw_rad)) <= config_.max_heading_change_rad + 1e-12;
+}
+
+Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
+  if (!gain_ || resolution_m_ != map.resolution()) {
+    auto gain = SonarGain::create(config_, map.resolution());
+    if (!gain.ok()) return gain.error();
+    gain_.emplace(std::move(gain.value()));
+    grid_.reset();
+    resolution_m_ = map.resolution();
+  }
+  if (grid_) {
+    // An older snapshot (another writer, or a restart) cannot be caught up with: rebuild.
+    if (grid_->update(map).ok()) return {};
+  }
+  const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
+  auto built = TraversabilityGrid::build(map, box, config_.collision_box_m);
+  if (!built.ok()) return built.error();
+  grid_.emplace(std::move(built.value()));
+  return {};
+}
+
+void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded) {
+  const TreeNode& p = tree_[static_cast<std::size_t>(parent)];
+  TreeNode n;
+  n.w = w;
+  n.parent = parent;
+  n.seeded = seeded;
+  n.cost_m = p.cost_m + edgeCost(p.w, w);
+  n.gain = gain_->segmentGain(map, p.w, w, &*grid_);
+  // Bircher 2016 Eq. 1: gain discounted by the cost of the path from the root.
+  n.value = p.value + n.gain * std::exp(-config_.lambda * n.cost_m);
+  tree_.push_back(n);
+}
+
+Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
+  if (!snapshot) return Error{"plan: no map snapshot was given"};
+  const map::MergedMap& map = *snapshot;
+  if (!current.p_world.allFinite() || !std::isfinite(current.yaw_rad))
+    return Error{"plan: current pose " + describe(current.p_world) + " yaw " + std::to_string(current.yaw_rad) +
+                 " is not finite"};
+  if (!inBox(config_, current.p_world)) return Error{outsideBox("plan: current position", config_, current.p_world)};
+  if (map.query(current.p_world).status == map::Occupancy::kOccupied)
+    return Error{"plan: current position " + describe(current.p_world) + " is inside an obstacle (occupied voxel)"};
+  if (Status s = syncTraversability(map); !s.ok()) return s.error();
+
+  PlanResult result;
+  result.map_version = map.version();
+  tree_.clear();
+  tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
+  std::vector<Waypoint> seed;
+  seed.swap(seed_branch_);
+  if (!grid_->isSafe(current.p_world)) {
+    result.status = PlanStatus::kNoPath;
+    result.tree_size = 1;
+    result.reason = "the collision box at the current position " + describe(current.p_world) +
+                    " is not entirely in known free space";
+    return result;
+  }
+
+  // Seed: the rest of the last best branch, as long as its edges are still free (Bircher 2016).
+  int parent = 0;
+  for (const Waypoint& w : seed) {
+    const Waypoint& from = tree_[static_cast<std::size_t>(parent)].w;
+    if (!headingOk(from, w) || !grid_->edgeIsFree(from.p_world, w.p_world)) break;
+    addNode(map, parent, w, true);
+    parent = static_cast<int>(tree_.size()) - 1;
+  }
+
+  const Eigen::Vector3d root = current.p_world;
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::uniform_real_distribution<double> ux(config_.box_min_world_m.x(), config_.box_max_world_m.x());
+  std::uniform_real_distribution<double> uy(config_.box_min_world_m.y(), config_.box_max_world_m.y());
+  std::uniform_real_distribution<double> uz(config_.box_min_world_m.z(), config_.box_max_world_m.z());
+  std::uniform_real_distribution<double> uyaw(-config_.max_heading_change_rad, config_.max_heading_change_rad);
+  auto bestValue = [&] {
+    double v = 0.0;
+    for (std::size_t i = 1; i < tree_.size(); ++i) v = std::max(v, tree_[i].value);
+    return v;
+  };
+  double best_value = bestValue();
+  int samples = 0;
+  while (samples < config_.max_samples) {
+    const int nodes = static_cast<int>(tree_.size()) - 1;
+    if (nodes >= config_.n_tol) break;
+    if (nodes >= config_.n_max && best_value > config_.gain_threshold) break;
+    ++samples;
+    // Thesis 4.5.3: x-y at the current depth, or z at the current x-y. Every draw happens whether or
+    // not the sample is kept, so the sequence depends only on the seed and the number of samples.
+    const bool horizontal = u01(rng_) < config_.xy_sample_share;
+    const double sx = ux(rng_);
+    const double sy = uy(rng_);
+    const double sz = uz(rng_);
+    const double dyaw = uyaw(rng_);
+    const Eigen::Vector3d target = horizontal ? Eigen::Vector3d(sx, sy, root.z()) : Eigen::Vector3d(root.x(), root.y(), sz);
+    int nearest = -1;
+    double nearest_d = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < tree_.size(); ++i) {
+      const Eigen::Vector3d& p = tree_[i].w.p_world;
+      const bool eligible = horizontal ? p.z() == root.z() : (p.x() == root.x() && p.y() == root.y());
+      if (!eligible) continue;
+      const double d = (target - p).norm();
+      if (d < nearest_d) {
+        nearest_d = d;
+        nearest = static_cast<int>(i);
+      }
+    }
+    // Too short an edge sees nothing new and wastes a node.
+    if (nearest < 0 || nearest_d < resolution_m_) continue;
+    const TreeNode& near = tree_[static_cast<std::size_t>(nearest)];
+    Eigen::Vector3d end = target;
+    if (nearest_d > config_.max_edge_m) {
+      end = near.w.p_world + (target - near.w.p_world) * (config_.max_edge_m / nearest_d);
+      // Keep the constrained coordinates exact (no rounding drift off the plane or the vertical).
+      if (horizontal) end.z() = root.z();
+      else end.head<2>() = root.head<2>();
+    }
+    if (!grid_->edgeIsFree(near.w.p_world, end)) continue;
+    const Waypoint w{end, geometry::wrapAngle(near.w.yaw_rad + dyaw)};
+    addNode(map, nearest, w, false);
+    best_value = std::max(best_value, tree_.back().value);
+  }
+  result.samples = samples;
+  result.tree_size = static_cast<int>(tree_.size());
+  if (tree_.size() == 1) {
+    result.status = PlanStatus::kNoPath;
+    result.reason = "no collision-free edge from the current position " + describe(root) + " in " +
+                    std::to_string(samples) + " samples";
+    return result;
+  }
+  std::size_t best = 1;
+  for (std::size_t i = 2; i < tree_.size(); ++i)
+    if (tree_[i].value > tree_[best].value) best = i;
+  result.best_value = tree_[best].value;
+  result.best_gain = tree_[best].gain;
+  if (result.best_value <= config_.gain_threshold) {
+    std::ostringstream s;
+    s << "best branch value " << result.best_value << " <= plan.gain_threshold " << config_.gain_threshold << " after "
+      << result.tree_size << " nodes";
+    result.reason = s.str();
+    return goHome(current, std::move(result));
+  }
+  // Indices from the best node back to the root (at least two: best >= 1).
+  std::vector<std::size_t> chain;
+  for (int i = static_cast<int>(best); i != -1; i = tree_[static_cast<std::size_t>(i)].parent)
+    chain.push_back(static_cast<std::size_t>(i));
+  result.status = PlanStatus::kExplore;
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) result.best_branch.push_back(tree_[*it].w);
+  result.waypoints.push_back(tree_[chain[chain.size() - 2]].w);
+  seed_branch_.clear();
+  for (std::size_t k = 2; k < result.best_branch.size(); ++k) seed_branch_.push_back(result.best_branch[k]);
+  return result;
+}
+
+PlanResult NbvPlanner::goHome(const Waypoint& current, PlanResult result) const {
+  auto path = grid_->findPath(current.p_world, home_.p_world);
+  if (!path.ok()) {
+    result.status = PlanStatus::kNoPath;
+    result.reason += "; exploration is complete but there is no way home: " + path.error().message;
+    return result;
+  }
+  result.status = PlanStatus::kComplete;
+  // Headings turn toward the home heading by at most the allowed change per waypoint (thesis 4.5.3).
+  double yaw = current.yaw_rad;
+  auto turnToward = [&](double target) {
+    const double d = geometry::wrapAngle(target - yaw);
+    yaw = geometry::wrapAngle(yaw + std::clamp(d, -config_.max_heading_change_rad, config_.max_heading_change_rad));
+    return yaw;
+  };
+  const auto& points = path.value();
+  for (std::size_t i = 1; i < points.size(); ++i) result.waypoints.push_back({points[i], turnToward(home_.yaw_rad)});
+  while (std::abs(geometry::wrapAngle(home_.yaw_rad - yaw)) > 1e-12)
+    result.waypoints.push_back({home_.p_world, turnToward(home_.yaw_rad)});
+  result.waypoints.back().yaw_rad = home_.yaw_rad;
+  return result;
+}
+
+}  // namespace vog::plan

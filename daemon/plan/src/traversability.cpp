@@ -1,0 +1,373 @@
+#include "vog/plan/traversability.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <sstream>
+
+namespace vog::plan {
+
+using map::KeyBox;
+using map::MergedMap;
+using map::VoxelKey;
+
+namespace {
+
+constexpr std::size_t kMaxGridVoxels = 256u * 1024u * 1024u;
+constexpr auto kFree = static_cast<std::uint8_t>(map::Occupancy::kFree);
+
+KeyBox intersect(const KeyBox& a, const KeyBox& b) {
+  KeyBox out;
+  out.min = a.min.cwiseMax(b.min);
+  out.max = a.max.cwiseMin(b.max);
+  return out;
+}
+
+KeyBox dilate(const KeyBox& a, const Eigen::Vector3i& r) {
+  KeyBox out;
+  out.min = a.min - r;
+  out.max = a.max + r;
+  return out;
+}
+
+// Dense scratch volume over an inclusive key box.
+struct Volume {
+  KeyBox keys;
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();
+  std::vector<std::uint8_t> v;
+
+  explicit Volume(const KeyBox& k) : keys(k), size(k.max - k.min + VoxelKey::Ones()) {
+    v.assign(static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z()),
+             0);
+  }
+  std::size_t index(int x, int y, int z) const {
+    return static_cast<std::size_t>(x - keys.min.x()) +
+           static_cast<std::size_t>(size.x()) * (static_cast<std::size_t>(y - keys.min.y()) +
+                                                  static_cast<std::size_t>(size.y()) *
+                                                      static_cast<std::size_t>(z - keys.min.z()));
+  }
+};
+
+// Sliding-window OR along one line: out(i) = any get(j) for j in [i - r, i + r], for i in [lo, hi].
+template <class Get, class Put>
+void windowOr(int lo, int hi, int r, Get&& get, Put&& put) {
+  int count = 0;
+  for (int j = lo - r; j <= lo + r; ++j) count += get(j);
+  put(lo, count > 0);
+  for (int i = lo + 1; i <= hi; ++i) {
+    count += get(i + r) - get(i - 1 - r);
+    put(i, count > 0);
+  }
+}
+
+}  // namespace
+
+Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const Eigen::AlignedBox3d& box_world,
+                                                     const Eigen::Vector3d& collision_box_m) {
+  if (!box_world.min().allFinite() || !box_world.max().allFinite() ||
+      (box_world.max().array() <= box_world.min().array()).any())
+    return Error{"traversability: the exploration box is empty or not finite"};
+  if (!collision_box_m.allFinite() || (collision_box_m.array() <= 0.0).any())
+    return Error{"traversability: the collision box must be finite and > 0 on every axis"};
+  TraversabilityGrid g;
+  g.resolution_ = map.resolution();
+  g.inv_resolution_ = 1.0 / g.resolution_;
+  g.bounds_ = map.config().bounds();
+  g.box_world_ = box_world;
+  for (int i = 0; i < 3; ++i) {
+    // A box centred anywhere in voxel v reaches at most floor(h / res) + 1 voxels past v.
+    g.r_[i] = static_cast<int>(std::floor(0.5 * collision_box_m[i] * g.inv_resolution_)) + 1;
+  }
+  KeyBox box_keys;
+  box_keys.min = map::pointToKey(box_world.min(), g.inv_resolution_);
+  box_keys.max = map::pointToKey(box_world.max(), g.inv_resolution_);
+  g.grid_ = dilate(box_keys, g.r_);
+  g.size_ = g.grid_.max - g.grid_.min + VoxelKey::Ones();
+  const double n = static_cast<double>(g.size_.x()) * g.size_.y() * g.size_.z();
+  if (n > static_cast<double>(kMaxGridVoxels)) {
+    std::ostringstream s;
+    s << "traversability: the exploration box needs " << n << " voxels at " << g.resolution_
+      << " m (limit " << kMaxGridVoxels << ")";
+    return Error{s.str()};
+  }
+  g.status_.assign(static_cast<std::size_t>(n), static_cast<std::uint8_t>(map::Occupancy::kUnknown));
+  g.safe_.assign(static_cast<std::size_t>(n), 0);
+  for (const auto& [origin, block] : map.blocksChangedSince(0)) g.readBlock(origin, block.get());
+  g.recompute(g.grid_);
+  g.map_version_ = map.version();
+  return g;
+}
+
+void TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Block* block) {
+  KeyBox b;
+  b.min = origin;
+  b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
+  const KeyBox clipped = intersect(b, grid_);
+  if (clipped.empty()) return;
+  VoxelKey k;
+  for (k.z() = clipped.min.z(); k.z() <= clipped.max.z(); ++k.z())
+    for (k.y() = clipped.min.y(); k.y() <= clipped.max.y(); ++k.y())
+      for (k.x() = clipped.min.x(); k.x() <= clipped.max.x(); ++k.x()) {
+        map::Occupancy status = map::Occupancy::kUnknown;
+        if (block != nullptr) {
+          const VoxelKey d = k - origin;
+          const auto i = static_cast<std::size_t>((d.z() << (2 * MergedMap::kBlockBits)) |
+                                                  (d.y() << MergedMap::kBlockBits) | d.x());
+          // The classification MergedMap::at makes: clamp, then threshold (thesis Eq. 3.4-3.5).
+          if (block->count(i) != 0) status = bounds_.classify(bounds_.clamp(block->sum(i)));
+        }
+        status_[indexOf(k)] = static_cast<std::uint8_t>(status);
+      }
+}
+
+void TraversabilityGrid::recompute(KeyBox region) {
+  region = intersect(region, grid_);
+  if (region.empty()) return;
+  // Pass 1 (x) over the region widened in y and z, pass 2 (y) widened in z, pass 3 (z) on the region.
+  KeyBox a = region;
+  a.min.y() -= r_.y();
+  a.max.y() += r_.y();
+  a.min.z() -= r_.z();
+  a.max.z() += r_.z();
+  a = intersect(a, grid_);
+  KeyBox b = region;
+  b.min.z() -= r_.z();
+  b.max.z() += r_.z();
+  b = intersect(b, grid_);
+
+  Volume ox(a);
+  for (int z = a.min.z(); z <= a.max.z(); ++z)
+    for (int y = a.min.y(); y <= a.max.y(); ++y) {
+      const std::size_t row = indexOf(VoxelKey(grid_.min.x(), y, z));
+      windowOr(
+          region.min.x(), region.max.x(), r_.x(),
+          [&](int x) -> int {
+            return x < grid_.min.x() || x > grid_.max.x()
+                       ? 1
+                       : (status_[row + static_cast<std::size_t>(x - grid_.min.x())] != kFree ? 1 : 0);
+          },
+          [&](int x, bool v) { ox.v[ox.index(x, y, z)] = v ? 1 : 0; });
+    }
+  Volume oy(b);
+  for (int z = b.min.z(); z <= b.max.z(); ++z)
+    for (int x = region.min.x(); x <= region.max.x(); ++x) {
+      windowOr(
+          region.min.y(), region.max.y(), r_.y(),
+          [&](int y) -> int { return y < a.min.y() || y > a.max.y() ? 1 : ox.v[ox.index(x, y, z)]; },
+          [&](int y, bool v) { oy.v[oy.index(x, y, z)] = v ? 1 : 0; });
+    }
+  for (int y = region.min.y(); y <= region.max.y(); ++y)
+    for (int x = region.min.x(); x <= region.max.x(); ++x) {
+      windowOr(
+          region.min.z(), region.max.z(), r_.z(),
+          [&](int z) -> int { return z < b.min.z() || z > b.max.z() ? 1 : oy.v[oy.index(x, y, z)]; },
+          [&](int z, bool v) { safe_[indexOf(VoxelKey(x, y, z))] = v ? 0 : 1; });
+    }
+}
+
+Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) {
+  if (newer.resolution() != resolution_) return Error{"traversability: snapshot resolution differs from the grid's"};
+  if (newer.version() < map_version_) {
+    std::ostringstream s;
+    s << "traversability: snapshot version " << newer.version() << " is older than the grid's " << map_version_;
+    return Error{s.str()};
+  }
+  TraversabilityUpdate stats;
+  if (newer.version() == map_version_) return stats;
+  // Output blocks (8^3 voxels of the grid) to recompute, as a flag per block of the grid.
+  const VoxelKey block_min = grid_.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
+  const VoxelKey block_max = grid_.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
+  const VoxelKey nb = block_max - block_min + VoxelKey::Ones();
+  std::vector<std::uint8_t> dirty(static_cast<std::size_t>(nb.x()) * static_cast<std::size_t>(nb.y()) *
+                                      static_cast<std::size_t>(nb.z()),
+                                  0);
+  auto markAround = [&](const VoxelKey& origin) {
+    KeyBox b;
+    b.min = origin;
+    b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
+    const KeyBox touched = intersect(dilate(b, r_), grid_);
+    if (touched.empty()) return;
+    const VoxelKey lo = touched.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - block_min;
+    const VoxelKey hi = touched.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - block_min;
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x)
+          dirty[static_cast<std::size_t>(x) +
+                static_cast<std::size_t>(nb.x()) *
+                    (static_cast<std::size_t>(y) + static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(z))] = 1;
+  };
+  auto touchesGrid = [&](const VoxelKey& origin) {
+    KeyBox b;
+    b.min = origin;
+    b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
+    return !intersect(b, grid_).empty();
+  };
+  // Removed first: a block removed and created again since the grid's version is in both lists, and
+  // its current content must win.
+  for (const VoxelKey& origin : newer.blocksRemovedSince(map_version_)) {
+    if (!touchesGrid(origin)) continue;
+    readBlock(origin, nullptr);
+    markAround(origin);
+    ++stats.blocks_read;
+  }
+  for (const auto& [origin, block] : newer.blocksChangedSince(map_version_)) {
+    if (!touchesGrid(origin)) continue;
+    readBlock(origin, block.get());
+    markAround(origin);
+    ++stats.blocks_read;
+  }
+  // Recompute the bounding box of the dirty blocks in one pass: the separable filter's margins are
+  // paid once instead of per block, and the cost never exceeds a rebuild.
+  KeyBox dirty_box;
+  VoxelKey k;
+  for (k.z() = 0; k.z() < nb.z(); ++k.z())
+    for (k.y() = 0; k.y() < nb.y(); ++k.y())
+      for (k.x() = 0; k.x() < nb.x(); ++k.x()) {
+        if (dirty[static_cast<std::size_t>(k.x()) +
+                  static_cast<std::size_t>(nb.x()) * (static_cast<std::size_t>(k.y()) +
+                                                       static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(k.z()))] == 0)
+          continue;
+        const VoxelKey lo = (block_min + k) * MergedMap::kBlockSide;
+        dirty_box.extend(lo, lo + VoxelKey::Constant(MergedMap::kBlockSide - 1));
+      }
+  if (!dirty_box.empty()) {
+    recompute(dirty_box);
+    const VoxelKey blocks = (dirty_box.max - dirty_box.min) / MergedMap::kBlockSide + VoxelKey::Ones();
+    stats.blocks_recomputed = blocks.x() * blocks.y() * blocks.z();
+  }
+  map_version_ = newer.version();
+  return stats;
+}
+
+bool TraversabilityGrid::insideBox(const Eigen::Vector3d& p) const {
+  return p.allFinite() && box_world_.contains(p);
+}
+
+bool TraversabilityGrid::isSafeKey(const VoxelKey& key) const {
+  return grid_.contains(key) && safe_[indexOf(key)] != 0;
+}
+
+bool TraversabilityGrid::isSafe(const Eigen::Vector3d& p) const {
+  return insideBox(p) && isSafeKey(map::pointToKey(p, inv_resolution_));
+}
+
+bool TraversabilityGrid::edgeIsFree(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+  // The exploration box is convex: both ends inside keep the whole edge inside.
+  if (!insideBox(a) || !insideBox(b)) return false;
+  VoxelKey key = map::pointToKey(a, inv_resolution_);
+  const VoxelKey last = map::pointToKey(b, inv_resolution_);
+  const Eigen::Vector3d d = b - a;
+  Eigen::Vector3i step;
+  Eigen::Vector3d t_max;
+  Eigen::Vector3d t_delta;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] == 0.0) {
+      step[i] = 0;
+      t_max[i] = std::numeric_limits<double>::infinity();
+      t_delta[i] = std::numeric_limits<double>::infinity();
+      continue;
+    }
+    step[i] = d[i] > 0.0 ? 1 : -1;
+    const double boundary = (key[i] + (step[i] > 0 ? 1 : 0)) * resolution_;
+    t_max[i] = (boundary - a[i]) / d[i];
+    t_delta[i] = resolution_ / std::abs(d[i]);
+  }
+  // Every voxel between the two end keys is visited at most once; the bound guards against rounding.
+  const long max_steps = 3 + (last - key).cwiseAbs().sum();
+  for (long n = 0; n <= max_steps; ++n) {
+    if (!isSafeKey(key)) return false;
+    if (key == last) return true;
+    int axis = 0;
+    if (t_max[1] < t_max[axis]) axis = 1;
+    if (t_max[2] < t_max[axis]) axis = 2;
+    if (t_max[axis] > 1.0) break;
+    key[axis] += step[axis];
+    t_max[axis] += t_delta[axis];
+  }
+  // Rounding ended the walk one step short of the end voxel: check it too.
+  return isSafeKey(last);
+}
+
+Result<std::vector<Eigen::Vector3d>> TraversabilityGrid::findPath(const Eigen::Vector3d& from,
+                                                                  const Eigen::Vector3d& to) const {
+  if (!isSafe(from)) return Error{"path: the start is not in known free space inside the exploration box"};
+  if (!isSafe(to)) return Error{"path: the goal is not in known free space inside the exploration box"};
+  const VoxelKey ks = map::pointToKey(from, inv_resolution_);
+  const VoxelKey kg = map::pointToKey(to, inv_resolution_);
+  const std::size_t n = safe_.size();
+  std::vector<float> cost(n, std::numeric_limits<float>::infinity());
+  std::vector<std::int32_t> parent(n, -1);
+  using Item = std::pair<float, std::int32_t>;  // (f = g + h in voxels, index)
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  auto keyOf = [&](std::size_t i) -> VoxelKey {
+    const auto sx = static_cast<std::size_t>(size_.x());
+    const auto sy = static_cast<std::size_t>(size_.y());
+    return VoxelKey(static_cast<int>(i % sx), static_cast<int>((i / sx) % sy), static_cast<int>(i / (sx * sy))) +
+           grid_.min;
+  };
+  auto h = [&](const VoxelKey& k) { return static_cast<float>((k - kg).cast<double>().norm()); };
+  const std::size_t is = indexOf(ks);
+  const std::size_t ig = indexOf(kg);
+  cost[is] = 0.0F;
+  open.emplace(h(ks), static_cast<std::int32_t>(is));
+  // 6-connected: the segment between two face neighbours' centres stays inside the two voxels, so
+  // every step is itself a free edge under edgeIsFree.
+  static const VoxelKey kSteps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  bool found = is == ig;
+  while (!open.empty() && !found) {
+    const auto [f, ii] = open.top();
+    open.pop();
+    const auto i = static_cast<std::size_t>(ii);
+    const VoxelKey k = keyOf(i);
+    if (f > cost[i] + h(k) + 1e-3F) continue;  // stale entry
+    for (const VoxelKey& s : kSteps) {
+      const VoxelKey nk = k + s;
+      if (!isSafeKey(nk) || (nk != kg && !insideBox(map::keyToCentre(nk, resolution_)))) continue;
+      const std::size_t j = indexOf(nk);
+      const float c = cost[i] + 1.0F;
+      if (c < cost[j]) {
+        cost[j] = c;
+        parent[j] = ii;
+        if (j == ig) {
+          found = true;
+          break;
+        }
+        open.emplace(c + h(nk), static_cast<std::int32_t>(j));
+      }
+    }
+  }
+  if (!found) return Error{"path: no known-free path between start and goal"};
+  std::vector<std::size_t> chain;
+  for (std::int32_t i = static_cast<std::int32_t>(ig); i != -1; i = parent[static_cast<std::size_t>(i)]) {
+    chain.push_back(static_cast<std::size_t>(i));
+    if (static_cast<std::size_t>(i) == is) break;
+  }
+  std::reverse(chain.begin(), chain.end());
+  // from lies in the start voxel and to in the goal voxel: they replace those voxels' centres.
+  std::vector<Eigen::Vector3d> cells;
+  cells.reserve(chain.size() + 1);
+  cells.push_back(from);
+  for (std::size_t c = 1; c + 1 < chain.size(); ++c) cells.push_back(map::keyToCentre(keyOf(chain[c]), resolution_));
+  cells.push_back(to);
+  // Shortcut: from each kept point, jump to the farthest point still reachable by one free edge.
+  std::vector<Eigen::Vector3d> out{from};
+  std::size_t i = 0;
+  while (i + 1 < cells.size()) {
+    std::size_t j = i + 1;
+    while (j + 1 < cells.size() && edgeIsFree(cells[i], cells[j + 1])) ++j;
+    out.push_back(cells[j]);
+    i = j;
+  }
+  return out;
+}
+
+std::size_t TraversabilityGrid::safeCount() const {
+  return static_cast<std::size_t>(std::count(safe_.begin(), safe_.end(), std::uint8_t{1}));
+}
+
+bool TraversabilityGrid::sameFlags(const TraversabilityGrid& other) const {
+  return grid_.min == other.grid_.min && grid_.max == other.grid_.max && safe_ == other.safe_ && status_ == other.status_;
+}
+
+}  // namespace vog::plan

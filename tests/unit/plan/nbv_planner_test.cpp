@@ -1,0 +1,347 @@
+#include "vog/plan/nbv_planner.hpp"
+
+#include "plan_fixtures.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <mutex>
+#include <numbers>
+#include <thread>
+
+namespace vog::plan {
+namespace {
+
+using test_fixtures::bruteForceEdgeFree;
+
+constexpr double kPi = std::numbers::pi;
+const Eigen::AlignedBox3d kRoom(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
+
+PlannerConfig roomConfig(std::uint64_t seed = 1) {
+  PlannerConfig c;
+  c.box_min_world_m = kRoom.min();
+  c.box_max_world_m = kRoom.max();
+  c.seed = seed;
+  return c;
+}
+
+// Maps shared by the tests (building them is the slow part).
+class PlannerMaps : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const map::GridConfig config;
+    const double res = config.resolution_m;
+    auto all = [](const map::VoxelKey&) { return true; };
+    // The west half of the room is known (free, with its walls); the east half is unknown.
+    const Eigen::AlignedBox3d west(kRoom.min(), Eigen::Vector3d(0.0, kRoom.max().y(), kRoom.max().z()));
+    auto west_walls = [&](const map::VoxelKey& k) { return map::keyToCentre(k, res).x() < 0.0; };
+    half_ = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, west_walls)}).release();
+    full_ = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, kRoom, all)}).release();
+  }
+  static void TearDownTestSuite() {
+    delete half_;
+    delete full_;
+  }
+  static std::shared_ptr<const map::MergedMap> half() { return half_->snapshot(); }
+  static std::shared_ptr<const map::MergedMap> full() { return full_->snapshot(); }
+
+  // The properties every tree must have: constrained sampling (thesis 4.5.3), free edges.
+  static void expectTreeValid(const NbvPlanner& planner, const map::MergedMap& map) {
+    const auto& tree = planner.lastTree();
+    const auto& c = planner.config();
+    const Eigen::Vector3d root = tree[0].w.p_world;
+    for (std::size_t i = 1; i < tree.size(); ++i) {
+      const TreeNode& n = tree[i];
+      const TreeNode& p = tree[static_cast<std::size_t>(n.parent)];
+      ASSERT_LT(n.parent, static_cast<int>(i));
+      EXPECT_LE(std::abs(geometry::wrapAngle(n.w.yaw_rad - p.w.yaw_rad)), c.max_heading_change_rad + 1e-9);
+      EXPECT_LE((n.w.p_world - p.w.p_world).norm(), c.max_edge_m + 1e-9);
+      ASSERT_TRUE(bruteForceEdgeFree(map, p.w.p_world, n.w.p_world, c.collision_box_m)) << "node " << i;
+      EXPECT_GE(n.value, p.value);
+      if (!n.seeded) {
+        const bool horizontal = n.w.p_world.z() == root.z() && p.w.p_world.z() == root.z();
+        const bool vertical = n.w.p_world.head<2>() == root.head<2>() && p.w.p_world.head<2>() == root.head<2>();
+        EXPECT_TRUE(horizontal || vertical) << "node " << i << " " << n.w.p_world.transpose();
+      }
+    }
+  }
+
+  static inline std::vector<Waypoint> seeded_expected_;
+  static map::MergedMap* half_;
+  static map::MergedMap* full_;
+};
+map::MergedMap* PlannerMaps::half_ = nullptr;
+map::MergedMap* PlannerMaps::full_ = nullptr;
+
+TEST_F(PlannerMaps, HalfExploredRoomExploresTowardTheUnknownHalf) {
+  const auto map = half();
+  // Facing the known west wall 1.5 m away: nothing unknown in view at the start.
+  const Waypoint start{{-3.5, 0.0, -1.75}, kPi};
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    auto planner = NbvPlanner::create(roomConfig(seed), start).value();
+    auto probe = SonarGain::create(planner->config(), map->resolution()).value();
+    ASSERT_EQ(probe.segmentGain(*map, start, start), 0.0);
+    const PlanResult r = planner->plan(map, start).value();
+    ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
+    ASSERT_EQ(r.waypoints.size(), 1u);
+    const Waypoint& next = r.waypoints[0];
+    EXPECT_EQ(next.p_world, r.best_branch[1].p_world);
+    EXPECT_TRUE(bruteForceEdgeFree(*map, start.p_world, next.p_world, planner->config().collision_box_m));
+    EXPECT_LE(std::abs(geometry::wrapAngle(next.yaw_rad - start.yaw_rad)), kPi / 2 + 1e-9);
+    // Toward the unknown (east) half: the first step moves east or turns the sonar toward the east,
+    // and the branch ends with the sonar looking at unknown space.
+    EXPECT_TRUE(next.p_world.x() > start.p_world.x() || std::cos(next.yaw_rad) > std::cos(start.yaw_rad) + 0.1)
+        << next.p_world.transpose() << " yaw " << next.yaw_rad;
+    EXPECT_GT(probe.segmentGain(*map, r.best_branch.back(), r.best_branch.back()), 0.0);
+    EXPECT_GT(r.best_value, planner->config().gain_threshold);
+    EXPECT_LE(r.tree_size, planner->config().n_tol + 1);
+    expectTreeValid(*planner, *map);
+  }
+}
+
+TEST_F(PlannerMaps, SameSeedSameResultAndTheBranchSeedsTheNextTree) {
+  const auto map = half();
+  const Waypoint start{{-3.0, 1.0, -1.5}, 0.3};
+  auto a = NbvPlanner::create(roomConfig(7), start).value();
+  auto b = NbvPlanner::create(roomConfig(7), start).value();
+  Waypoint pa = start;
+  Waypoint pb = start;
+  for (int step = 0; step < 3; ++step) {
+    const PlanResult ra = a->plan(map, pa).value();
+    const PlanResult rb = b->plan(map, pb).value();
+    ASSERT_EQ(ra.status, rb.status);
+    ASSERT_EQ(ra.tree_size, rb.tree_size);
+    ASSERT_EQ(ra.samples, rb.samples);
+    EXPECT_EQ(ra.best_value, rb.best_value);
+    ASSERT_EQ(ra.best_branch.size(), rb.best_branch.size());
+    for (std::size_t i = 0; i < ra.best_branch.size(); ++i) {
+      EXPECT_EQ(ra.best_branch[i].p_world, rb.best_branch[i].p_world);
+      EXPECT_EQ(ra.best_branch[i].yaw_rad, rb.best_branch[i].yaw_rad);
+    }
+    if (ra.status != PlanStatus::kExplore) break;
+    if (step > 0) {
+      // The previous branch beyond its first edge was re-inserted first, unchanged.
+      const auto& tree = a->lastTree();
+      for (std::size_t i = 0; i < seeded_expected_.size(); ++i) {
+        ASSERT_LT(i + 1, tree.size());
+        EXPECT_TRUE(tree[i + 1].seeded);
+        EXPECT_EQ(tree[i + 1].w.p_world, seeded_expected_[i].p_world);
+      }
+    }
+    seeded_expected_.assign(ra.best_branch.begin() + 2, ra.best_branch.end());
+    pa = ra.waypoints[0];  // the vehicle reaches the waypoint
+    pb = rb.waypoints[0];
+    expectTreeValid(*a, *map);
+  }
+  // Another seed grows another tree.
+  auto c = NbvPlanner::create(roomConfig(8), start).value();
+  auto d = NbvPlanner::create(roomConfig(7), start).value();
+  const PlanResult rc = c->plan(map, start).value();
+  const PlanResult rd = d->plan(map, start).value();
+  EXPECT_NE(rc.best_branch.back().p_world, rd.best_branch.back().p_world);
+}
+
+TEST_F(PlannerMaps, FullyKnownRoomIsCompleteAndReturnsHome) {
+  const auto map = full();
+  const Waypoint home{{-3.0, -1.5, -1.75}, 0.0};
+  auto planner = NbvPlanner::create(roomConfig(), home).value();
+  const Waypoint current{{3.0, 1.5, -1.2}, 2.9};
+  const PlanResult r = planner->plan(map, current).value();
+  ASSERT_EQ(r.status, PlanStatus::kComplete) << r.reason;
+  EXPECT_EQ(r.best_value, 0.0);
+  EXPECT_EQ(r.tree_size, planner->config().n_tol + 1);  // grew to N_TOL before giving up
+  ASSERT_FALSE(r.waypoints.empty());
+  EXPECT_EQ(r.waypoints.back().p_world, home.p_world);
+  EXPECT_EQ(r.waypoints.back().yaw_rad, home.yaw_rad);
+  Waypoint prev = current;
+  for (const Waypoint& w : r.waypoints) {
+    EXPECT_TRUE(bruteForceEdgeFree(*map, prev.p_world, w.p_world, planner->config().collision_box_m));
+    EXPECT_LE(std::abs(geometry::wrapAngle(w.yaw_rad - prev.yaw_rad)), kPi / 2 + 1e-9);
+    prev = w;
+  }
+  expectTreeValid(*planner, *map);
+}
+
+TEST_F(PlannerMaps, ErrorsNameTheBadInput) {
+  const auto map = half();
+  const Waypoint start{{-3.0, 0.0, -1.75}, 0.0};
+  auto expectError = [](const PlannerConfig& c, const Waypoint& home, const std::string& needle) {
+    const auto r = NbvPlanner::create(c, home);
+    ASSERT_FALSE(r.ok()) << needle;
+    EXPECT_NE(r.error().message.find(needle), std::string::npos) << r.error().message;
+  };
+  PlannerConfig c = roomConfig();
+  c.lambda = -0.5;
+  expectError(c, start, "plan.lambda");
+  c = roomConfig();
+  c.box_max_world_m.z() = c.box_min_world_m.z();
+  expectError(c, start, "zero volume");
+  c = roomConfig();
+  c.n_max = 0;
+  expectError(c, start, "plan.n_max");
+  c = roomConfig();
+  c.collision_box_m.y() = 0.0;
+  expectError(c, start, "plan.collision_box_m");
+  c = roomConfig();
+  c.max_heading_change_rad = 4.0;
+  expectError(c, start, "plan.max_heading_change_rad");
+  c = roomConfig();
+  c.fan.n_beams = 0;
+  expectError(c, start, "plan.sonar.n_beams");
+  expectError(roomConfig(), {{9.0, 0.0, -1.0}, 0.0}, "outside the exploration box");
+  expectError(roomConfig(), {{std::numeric_limits<double>::quiet_NaN(), 0.0, -1.0}, 0.0}, "not finite");
+
+  auto planner = NbvPlanner::create(roomConfig(), start).value();
+  auto err = planner->plan(nullptr, start);
+  ASSERT_FALSE(err.ok());
+  EXPECT_NE(err.error().message.find("snapshot"), std::string::npos);
+  err = planner->plan(map, {{-3.0, 0.0, -1.75}, std::numeric_limits<double>::infinity()});
+  ASSERT_FALSE(err.ok());
+  EXPECT_NE(err.error().message.find("not finite"), std::string::npos);
+  err = planner->plan(map, {{-3.0, 0.0, 2.0}, 0.0});
+  ASSERT_FALSE(err.ok());
+  EXPECT_NE(err.error().message.find("outside the exploration box"), std::string::npos);
+  // Inside the west wall (an occupied voxel).
+  const double res = map->resolution();
+  const Eigen::Vector3d wall = map::keyToCentre(map::pointToKey(Eigen::Vector3d(-5.0, 0.0, -1.75), 1.0 / res) -
+                                                    map::VoxelKey(1, 0, 0),
+                                                res);
+  ASSERT_EQ(map->query(wall).status, map::Occupancy::kOccupied);
+  c = roomConfig();
+  c.box_min_world_m.x() = -6.0;
+  auto wide = NbvPlanner::create(c, start).value();
+  err = wide->plan(map, {wall, 0.0});
+  ASSERT_FALSE(err.ok());
+  EXPECT_NE(err.error().message.find("obstacle"), std::string::npos);
+}
+
+TEST(NbvPlanner, BoxedInIsNoPathNotAHang) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  auto all = [](const map::VoxelKey&) { return true; };
+  PlannerConfig c = roomConfig();
+  const Eigen::Vector3d centre = map::keyToCentre(map::VoxelKey(0, 0, -18), res);
+  // (a) A pocket smaller than the collision box: the current pose itself is not safe.
+  {
+    const Eigen::AlignedBox3d pocket(centre - Eigen::Vector3d(0.4, 0.4, 0.2), centre + Eigen::Vector3d(0.4, 0.4, 0.2));
+    auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, pocket, all)});
+    auto planner = NbvPlanner::create(c, {centre, 0.0}).value();
+    const PlanResult r = planner->plan(map->snapshot(), {centre, 0.0}).value();
+    EXPECT_EQ(r.status, PlanStatus::kNoPath);
+    EXPECT_NE(r.reason.find("collision box"), std::string::npos) << r.reason;
+  }
+  // (b) A pocket 13 x 13 x 7 voxels walled in by occupied voxels: the box fits in exactly one voxel,
+  // so no edge does.
+  {
+    const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-6, -6, -21), res);
+    const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(6, 6, -15), res);
+    auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), all)});
+    auto planner = NbvPlanner::create(c, {centre, 0.0}).value();
+    ASSERT_TRUE(planner->plan(map->snapshot(), {centre, 0.0}).ok());
+    ASSERT_NE(planner->traversability(), nullptr);
+    EXPECT_EQ(planner->traversability()->safeCount(), 1u);
+    const PlanResult r = planner->plan(map->snapshot(), {centre, 0.0}).value();
+    EXPECT_EQ(r.status, PlanStatus::kNoPath);
+    EXPECT_EQ(r.tree_size, 1);
+    EXPECT_EQ(r.samples, c.max_samples);
+    EXPECT_NE(r.reason.find("no collision-free edge"), std::string::npos) << r.reason;
+  }
+  // (c) Known nothing at all.
+  {
+    auto map = map::MergedMap::create(config).value();
+    auto planner = NbvPlanner::create(c, {centre, 0.0}).value();
+    EXPECT_EQ(planner->plan(map->snapshot(), {centre, 0.0}).value().status, PlanStatus::kNoPath);
+  }
+}
+
+TEST(NbvPlanner, CompleteButNoWayHomeIsNoPath) {
+  const map::GridConfig config;
+  auto all = [](const map::VoxelKey&) { return true; };
+  // Two separate known rooms: the vehicle is in one, home in the other.
+  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
+  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all),
+                                              test_fixtures::carvedGrid(config, east, all)});
+  PlannerConfig c = roomConfig();
+  c.n_tol = 20;  // (the gain is zero everywhere: a smaller tree says so sooner)
+  c.max_samples = 200;
+  auto planner = NbvPlanner::create(c, {{-3.0, 0.0, -1.75}, 0.0}).value();
+  const PlanResult r = planner->plan(map->snapshot(), {{3.0, 0.0, -1.75}, 0.0}).value();
+  EXPECT_EQ(r.status, PlanStatus::kNoPath);
+  EXPECT_NE(r.reason.find("no way home"), std::string::npos) << r.reason;
+}
+
+TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
+  // The merge thread adds submaps and publishes snapshots; the planning thread plans on whichever
+  // snapshot is newest (thesis 4.5.5). Neither waits for the other beyond swapping a pointer.
+  const map::GridConfig config;
+  const auto entries = test_fixtures::pierSubmaps(config, 5, 100, 2);
+  auto writer = map::MergedMap::create(config).value();
+  ASSERT_TRUE(writer->add(entries[0]).ok());
+  ASSERT_TRUE(writer->add(entries[1]).ok());
+  std::mutex published_mutex;
+  std::shared_ptr<const map::MergedMap> published = writer->snapshot();  // guarded by published_mutex
+  auto newest = [&] {
+    std::lock_guard<std::mutex> lock(published_mutex);
+    return published;
+  };
+
+  PlannerConfig c;
+  c.box_min_world_m = {-8.0, -8.0, -4.5};
+  c.box_max_world_m = {8.0, 8.0, 0.5};
+  c.n_tol = 30;
+  const Eigen::AlignedBox3d box(c.box_min_world_m, c.box_max_world_m);
+  // A start where the collision box is in known free space, inside the first lap.
+  const auto grid0 = TraversabilityGrid::build(*newest(), box, c.collision_box_m).value();
+  Waypoint start;
+  bool found = false;
+  for (int k = 0; k < 360 && !found; ++k)
+    for (double r = 1.0; r < 5.5 && !found; r += 0.05)
+      for (double z = -1.4; z > -2.6 && !found; z -= 0.05) {
+        const Eigen::Vector3d p(r * std::cos(k * kPi / 180), r * std::sin(k * kPi / 180), z);
+        if (grid0.isSafe(p)) {
+          start = {p, geometry::wrapAngle(k * kPi / 180 + kPi)};
+          found = true;
+        }
+      }
+  ASSERT_TRUE(found);
+
+  std::atomic<bool> done{false};
+  std::thread merge_thread([&] {
+    for (std::size_t i = 2; i < entries.size(); ++i) {
+      EXPECT_TRUE(writer->add(entries[i]).ok());
+      auto snap = writer->snapshot();
+      std::lock_guard<std::mutex> lock(published_mutex);
+      published = std::move(snap);
+    }
+    done = true;
+  });
+  auto planner = NbvPlanner::create(c, start).value();
+  Waypoint current = start;
+  std::uint64_t last_version = 0;
+  int plans = 0;
+  while (!done || plans < 3) {
+    const auto snap = newest();
+    const auto planned = planner->plan(snap, current);
+    EXPECT_TRUE(planned.ok());
+    if (!planned.ok()) break;  // (the merge thread is still joined below)
+    const PlanResult& r = planned.value();
+    EXPECT_EQ(r.map_version, snap->version());
+    EXPECT_GE(r.map_version, last_version);
+    last_version = r.map_version;
+    if (r.status == PlanStatus::kExplore) {
+      EXPECT_TRUE(bruteForceEdgeFree(*snap, current.p_world, r.waypoints[0].p_world, c.collision_box_m));
+      current = r.waypoints[0];
+    }
+    ++plans;
+  }
+  merge_thread.join();
+  // The planner's incrementally updated grid equals one built from the final snapshot.
+  const auto final_snap = newest();
+  ASSERT_TRUE(planner->plan(final_snap, current).ok());
+  const auto scratch = TraversabilityGrid::build(*final_snap, box, c.collision_box_m).value();
+  EXPECT_TRUE(planner->traversability()->sameFlags(scratch));
+}
+
+}  // namespace
+}  // namespace vog::plan

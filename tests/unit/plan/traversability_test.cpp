@@ -1,0 +1,225 @@
+#include "vog/plan/traversability.hpp"
+
+#include "plan_fixtures.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace vog::plan {
+namespace {
+
+using test_fixtures::bruteForceEdgeFree;
+
+const Eigen::Vector3d kCollisionBox(1.0, 1.0, 0.5);
+const Eigen::AlignedBox3d kPierBox(Eigen::Vector3d(-8.0, -8.0, -4.5), Eigen::Vector3d(8.0, 8.0, 0.5));
+
+class PierTraversability : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    entries_ = new std::vector<map::SubmapEntry>(test_fixtures::pierSubmaps(map::GridConfig{}, 8, 60, 3));
+  }
+  static void TearDownTestSuite() {
+    delete entries_;
+    entries_ = nullptr;
+  }
+  static std::unique_ptr<map::MergedMap> merged(std::size_t first, std::size_t last) {
+    auto m = map::MergedMap::create(map::GridConfig{}).value();
+    for (std::size_t i = first; i < last; ++i) EXPECT_TRUE(m->add((*entries_)[i]).ok());
+    return m;
+  }
+  static std::vector<map::SubmapEntry>* entries_;
+};
+std::vector<map::SubmapEntry>* PierTraversability::entries_ = nullptr;
+
+TEST_F(PierTraversability, EdgeCheckIsConservativeAgainstBruteForce) {
+  const auto map = merged(0, entries_->size());
+  const auto grid = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
+  ASSERT_GT(grid.safeCount(), 1000u);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> radius(2.0, 7.0);
+  std::uniform_real_distribution<double> angle(0.0, 6.283);
+  std::uniform_real_distribution<double> depth(-3.0, -1.0);
+  int grid_free = 0;
+  int brute_free = 0;
+  for (int i = 0; i < 300; ++i) {
+    // Edges around the orbit, where the sonar has seen free space; every other one starts at a safe
+    // point, so that many edges are free.
+    Eigen::Vector3d a;
+    for (int tries = 0; tries < 2000; ++tries) {
+      const double r = radius(rng);
+      const double t = angle(rng);
+      a = Eigen::Vector3d(r * std::cos(t), r * std::sin(t), depth(rng));
+      if (i % 2 == 1 || grid.isSafe(a)) break;
+    }
+    const Eigen::Vector3d b = a + 2.0 * std::abs(u(rng)) * Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng)).normalized();
+    const bool fast = grid.edgeIsFree(a, b);
+    const bool brute = kPierBox.contains(a) && kPierBox.contains(b) && bruteForceEdgeFree(*map, a, b, kCollisionBox);
+    // Conservative: never free when the brute-force check finds a non-free voxel in the swept box.
+    ASSERT_FALSE(fast && !brute) << "edge " << a.transpose() << " -> " << b.transpose();
+    grid_free += fast;
+    brute_free += brute;
+  }
+  EXPECT_GE(grid_free, 30);  // the test exercises free edges, not only blocked ones
+  // At most one voxel per side stricter than exact: most exactly-free edges stay free.
+  EXPECT_GE(grid_free, brute_free / 2) << grid_free << " of " << brute_free;
+}
+
+TEST_F(PierTraversability, SafeFlagMatchesBruteForceBoxAtVoxelCentresNearTheBoundary) {
+  const auto map = merged(0, entries_->size());
+  const auto grid = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
+  const Eigen::Vector3i r = grid.inflationVoxels();
+  EXPECT_EQ(r, Eigen::Vector3i(6, 6, 3));  // floor(h / 0.095) + 1
+  // Safe voxel v <=> every voxel within r of v is known free (the definition, checked literally).
+  std::mt19937_64 rng(8);
+  std::uniform_int_distribution<int> ux(grid.gridKeys().min.x(), grid.gridKeys().max.x());
+  std::uniform_int_distribution<int> uy(grid.gridKeys().min.y(), grid.gridKeys().max.y());
+  std::uniform_int_distribution<int> uz(grid.gridKeys().min.z(), grid.gridKeys().max.z());
+  int safe = 0;
+  for (int i = 0; i < 20000 && safe < 200; ++i) {
+    const map::VoxelKey v(ux(rng), uy(rng), uz(rng));
+    bool expect = true;
+    for (int dz = -r.z(); dz <= r.z() && expect; ++dz)
+      for (int dy = -r.y(); dy <= r.y() && expect; ++dy)
+        for (int dx = -r.x(); dx <= r.x() && expect; ++dx) {
+          const map::VoxelKey k = v + map::VoxelKey(dx, dy, dz);
+          expect = grid.gridKeys().contains(k) && map->at(k).status == map::Occupancy::kFree;
+        }
+    ASSERT_EQ(grid.isSafeKey(v), expect) << v.transpose();
+    safe += expect;
+  }
+  EXPECT_GT(safe, 20);
+}
+
+TEST_F(PierTraversability, IncrementalUpdateEqualsRebuild) {
+  // Grow the map as the merge thread does, with a removal (a submap leaving) in between.
+  auto writer = map::MergedMap::create(map::GridConfig{}).value();
+  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(writer->add((*entries_)[i]).ok());
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, kCollisionBox).value();
+  const std::size_t safe_before = grid.safeCount();
+  for (std::size_t i = 3; i < entries_->size(); ++i) {
+    ASSERT_TRUE(writer->add((*entries_)[i]).ok());
+    if (i == 5) {
+      ASSERT_TRUE(writer->remove((*entries_)[1].id).ok());
+    }
+    if (i % 2 == 0 && i + 1 < entries_->size()) continue;  // sometimes two changes per update
+    const auto snap = writer->snapshot();
+    const auto stats = grid.update(*snap).value();
+    EXPECT_FALSE(stats.rebuilt);
+    EXPECT_GT(stats.blocks_read, 0);
+    const auto scratch = TraversabilityGrid::build(*snap, kPierBox, kCollisionBox).value();
+    ASSERT_TRUE(grid.sameFlags(scratch)) << "after submap " << i;
+    EXPECT_EQ(grid.mapVersion(), snap->version());
+  }
+  EXPECT_NE(grid.safeCount(), safe_before);  // the updates changed something
+  // Removing everything leaves nothing safe.
+  for (std::size_t i = 0; i < entries_->size(); ++i) {
+    if (i != 1) {
+      ASSERT_TRUE(writer->remove((*entries_)[i].id).ok());
+    }
+  }
+  ASSERT_TRUE(grid.update(*writer->snapshot()).ok());
+  EXPECT_EQ(grid.safeCount(), 0u);
+}
+
+TEST_F(PierTraversability, OlderSnapshotIsAnError) {
+  auto writer = map::MergedMap::create(map::GridConfig{}).value();
+  ASSERT_TRUE(writer->add((*entries_)[0]).ok());
+  const auto old_snap = writer->snapshot();
+  ASSERT_TRUE(writer->add((*entries_)[1]).ok());
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, kCollisionBox).value();
+  const auto r = grid.update(*old_snap);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("older"), std::string::npos);
+}
+
+TEST(Traversability, CarvedRoomMarginsAndPathHome) {
+  const map::GridConfig config;
+  const Eigen::AlignedBox3d room(Eigen::Vector3d(-3.0, -2.0, -2.5), Eigen::Vector3d(3.0, 2.0, -0.5));
+  auto all = [](const map::VoxelKey&) { return true; };
+  const auto grid_room = test_fixtures::carvedGrid(config, room, all);
+  auto map = test_fixtures::mergedOf(config, {grid_room});
+  const auto grid = TraversabilityGrid::build(*map, room, kCollisionBox).value();
+  // Exactly known room: a box centre is safe iff it keeps r voxels from the walls.
+  const map::KeyBox free_keys = test_fixtures::centreKeys(room, config.resolution_m);
+  const Eigen::Vector3i r = grid.inflationVoxels();
+  map::VoxelKey k;
+  std::size_t expected = 0;
+  for (k.z() = free_keys.min.z(); k.z() <= free_keys.max.z(); ++k.z())
+    for (k.y() = free_keys.min.y(); k.y() <= free_keys.max.y(); ++k.y())
+      for (k.x() = free_keys.min.x(); k.x() <= free_keys.max.x(); ++k.x()) {
+        const bool inner = ((k - free_keys.min).array() >= r.array()).all() &&
+                           ((free_keys.max - k).array() >= r.array()).all();
+        ASSERT_EQ(grid.isSafeKey(k), inner) << k.transpose();
+        expected += inner;
+      }
+  EXPECT_EQ(grid.safeCount(), expected);
+  EXPECT_GT(expected, 0u);
+  // A path across the room: every returned edge is free, ends are exact.
+  const Eigen::Vector3d from(-2.2, -1.2, -1.5);
+  const Eigen::Vector3d to(2.2, 1.2, -1.5);
+  const auto path = grid.findPath(from, to).value();
+  ASSERT_GE(path.size(), 2u);
+  EXPECT_EQ(path.front(), from);
+  EXPECT_EQ(path.back(), to);
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    EXPECT_TRUE(grid.edgeIsFree(path[i - 1], path[i]));
+    EXPECT_TRUE(bruteForceEdgeFree(*map, path[i - 1], path[i], kCollisionBox));
+  }
+  // Unsafe goal (against a wall): an error naming the goal.
+  const auto bad = grid.findPath(from, Eigen::Vector3d(2.9, 1.9, -0.6));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("goal"), std::string::npos);
+}
+
+TEST(Traversability, PathAroundAWallThroughADoor) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  // Two rooms joined by a 1.5 m wide door in a wall at x = 0: the path must go through the door.
+  const Eigen::AlignedBox3d west(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(-0.2, 3.0, -0.8));
+  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.2, -3.0, -2.0), Eigen::Vector3d(4.0, 3.0, -0.8));
+  const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 1.0, -2.0), Eigen::Vector3d(0.3, 2.5, -0.8));
+  // The rooms' walls leave the door opening out (a wall voxel seen free once and hit once stays occupied).
+  auto notInDoor = [&](const map::VoxelKey& k) {
+    const Eigen::Vector3d c = map::keyToCentre(k, res);
+    return !(std::abs(c.x()) < 0.3 && c.y() > 1.0 && c.y() < 2.5);
+  };
+  auto none = [](const map::VoxelKey&) { return false; };
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, notInDoor),
+                                              test_fixtures::carvedGrid(config, east, notInDoor),
+                                              test_fixtures::carvedGrid(config, door, none)});
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(4.0, 3.0, -0.8));
+  const auto grid = TraversabilityGrid::build(*map, box, kCollisionBox).value();
+  const Eigen::Vector3d from(-3.0, -2.0, -1.4);
+  const Eigen::Vector3d to(3.0, -2.0, -1.4);
+  EXPECT_FALSE(grid.edgeIsFree(from, to));
+  const auto path = grid.findPath(from, to).value();
+  bool through_door = false;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    ASSERT_TRUE(bruteForceEdgeFree(*map, path[i - 1], path[i], kCollisionBox));
+    through_door = through_door || (path[i].y() > 1.0 && path[i].y() < 2.5);
+  }
+  EXPECT_TRUE(through_door);
+}
+
+TEST(Traversability, BadBoxesAreErrors) {
+  const map::GridConfig config;
+  auto map = map::MergedMap::create(config).value();
+  const Eigen::AlignedBox3d flat(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 0));
+  EXPECT_FALSE(TraversabilityGrid::build(*map, flat, kCollisionBox).ok());
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1));
+  EXPECT_FALSE(TraversabilityGrid::build(*map, box, Eigen::Vector3d(1, 0, 1)).ok());
+  const Eigen::AlignedBox3d huge(Eigen::Vector3d(-1e4, -1e4, -1e4), Eigen::Vector3d(1e4, 1e4, 1e4));
+  const auto r = TraversabilityGrid::build(*map, huge, kCollisionBox);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("voxels"), std::string::npos);
+  // An empty map: nothing is safe, no edge is free, NaN is never free.
+  const auto g = TraversabilityGrid::build(*map, box, kCollisionBox).value();
+  EXPECT_EQ(g.safeCount(), 0u);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(g.edgeIsFree(Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d(nan, 0.5, 0.5)));
+}
+
+}  // namespace
+}  // namespace vog::plan
