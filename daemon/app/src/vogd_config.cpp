@@ -1,0 +1,281 @@
+#include "vog/app/vogd_config.hpp"
+
+#include "vog/app/config_reader.hpp"
+
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace vog::app {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+void readReconnect(ConfigMap m, io::ReconnectConfig& c) {
+  m.integer("initial_delay_ms", c.initial_delay_ms, 1, 60'000);
+  m.integer("max_delay_ms", c.max_delay_ms, 1, 3'600'000);
+  m.number("factor", c.factor, 1.0, 10.0);
+  m.finish();
+}
+
+void readSerial(ConfigMap& m, io::SerialConfig& c) {
+  m.text("device", c.device_path);
+  std::uint64_t baud = c.baud;
+  m.unsignedInteger("baud", baud, 300, 4'000'000);
+  c.baud = static_cast<unsigned>(baud);
+  std::string parity = c.parity == io::Parity::kNone ? "none" : c.parity == io::Parity::kOdd ? "odd" : "even";
+  m.choice("parity", parity, {"none", "odd", "even"});
+  c.parity = parity == "none" ? io::Parity::kNone : parity == "odd" ? io::Parity::kOdd : io::Parity::kEven;
+  m.integer("data_bits", c.data_bits, 5, 8);
+  m.integer("stop_bits", c.stop_bits, 1, 2);
+  m.boolean("exclusive", c.exclusive);
+  readReconnect(m.map("reconnect"), c.reconnect);
+}
+
+void readPort(ConfigMap& m, const char* key, std::uint16_t& port, std::uint64_t min) {
+  std::uint64_t p = port;
+  m.unsignedInteger(key, p, min, 65535);
+  port = static_cast<std::uint16_t>(p);
+}
+
+void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
+  ConfigMap g = m.map("grid");
+  map::GridConfig& grid = c.builder.grid;
+  g.number("resolution_m", grid.resolution_m, 0.01, 1.0);
+  g.number("prob_hit", grid.prob_hit, 0.5, 0.999);
+  g.number("prob_miss", grid.prob_miss, 0.001, 0.5);
+  g.number("clamp_min", grid.clamp_min, 0.001, 0.5);
+  g.number("clamp_max", grid.clamp_max, 0.5, 0.999);
+  g.number("occupancy_threshold", grid.occupancy_threshold, 0.01, 0.99);
+  g.number("max_range_m", grid.max_range_m, 0.5, 100.0);
+  g.number("cloud_voxel_m", grid.cloud_voxel_m, 0.0, 2.0);
+  g.integer("normal_neighbours", grid.normal_neighbours, 3, 100);
+  g.finish();
+  ConfigMap s = m.map("submaps");
+  slam::SubmapBuilderConfig& b = c.builder;
+  s.integer("max_scans", b.max_scans, 2, 100'000);
+  s.degrees("max_heading_change_deg", b.max_heading_change_rad, 1.0, 360.0);
+  s.number("max_position_stddev_m", b.max_position_stddev_m, 0.001, 100.0);
+  s.degrees("max_yaw_stddev_deg", b.max_yaw_stddev_rad, 0.001, 180.0);
+  s.number("odometry_cov_x_m2_per_s", b.odometry_cov_x_m2_per_s, 0.0, 10.0);
+  s.number("odometry_cov_y_m2_per_s", b.odometry_cov_y_m2_per_s, 0.0, 10.0);
+  s.number("odometry_cov_yaw_rad2_per_s", b.odometry_cov_yaw_rad2_per_s, 0.0, 10.0);
+  s.finish();
+  ConfigMap l = m.map("loop_closures");
+  slam::LoopCloserConfig& lc = c.loop_closer;
+  l.boolean("enabled", c.loop_closures);
+  std::string mode = slam::toString(lc.mode);
+  l.choice("mode", mode, {"degenerate", "p2p"});
+  lc.mode = mode == "p2p" ? slam::LoopClosureMode::kPointToPoint2d : slam::LoopClosureMode::kDegenerate;
+  l.number("max_fitness_m2", lc.acceptance.max_fitness_m2, 1e-6, 10.0);
+  l.number("max_direction_stddev", lc.point_to_plane.max_direction_stddev, 1e-6, 10.0);
+  l.number("sigma_point_m", lc.point_to_plane.sigma_point_m, 1e-4, 10.0);
+  double corr = lc.point_to_plane.max_correspondence_distance_m;
+  l.number("max_correspondence_distance_m", corr, 0.01, 10.0);
+  lc.point_to_plane.max_correspondence_distance_m = corr;
+  lc.p2p.max_correspondence_distance_m = corr;
+  l.degrees("max_heading_difference_deg", lc.max_heading_difference_rad, 1.0, 180.0);
+  l.degrees("max_yaw_disagreement_deg", lc.max_yaw_disagreement_rad, 0.1, 180.0);
+  l.number("min_overlap_fraction", lc.min_overlap_fraction, 0.0, 1.0);
+  l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);
+  l.number("odometry_cov_y_m2_per_s", lc.acceptance.odometry_cov_y_m2_per_s, 1e-9, 10.0);
+  l.number("robust_loss_scale", c.graph.loop_closure_loss_scale, 1e-3, 1e3);
+  l.finish();
+  m.number("depth_stddev_m", c.depth_stddev_m, 1e-4, 10.0);
+  m.degrees("roll_pitch_stddev_deg", c.roll_pitch_stddev_rad, 1e-3, 45.0);
+  m.boolean("optimize_every_submap", c.optimize_every_submap);
+  m.finish();
+}
+
+void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
+  m.vector3("collision_box_m", c.collision_box_m, 0.01, 20.0);
+  m.number("planner_range_m", c.planner_range_m, 0.1, 100.0);
+  m.number("lambda", c.lambda, 0.0, 100.0);
+  m.number("max_edge_m", c.max_edge_m, 0.05, 100.0);
+  m.integer("n_max", c.n_max, 1, 100'000);
+  m.integer("n_tol", c.n_tol, 1, 100'000);
+  m.integer("max_samples", c.max_samples, 1, 10'000'000);
+  m.degrees("max_heading_change_deg", c.max_heading_change_rad, 1.0, 180.0);
+  m.number("v_max_mps", c.v_max_mps, 0.01, 10.0);
+  m.degrees("yaw_rate_deg_per_s", c.yaw_rate_radps, 0.1, 180.0);
+  m.number("xy_sample_share", c.xy_sample_share, 0.0, 1.0);
+  m.number("gain_unknown", c.gain_unknown, 0.0, 1e6);
+  m.number("gain_free", c.gain_free, 0.0, 1e6);
+  m.number("gain_occupied", c.gain_occupied, 0.0, 1e6);
+  m.number("gain_threshold", c.gain_threshold, 0.0, 1e12);
+  m.unsignedInteger("seed", c.seed, 0, std::numeric_limits<std::uint64_t>::max());
+  m.finish();
+}
+
+void readNav(ConfigMap m, nav::DeadReckoningConfig& c) {
+  m.degrees("dvl_mount_roll_deg", c.dvl_mount_roll_rad, -180.0, 180.0);
+  m.degrees("dvl_mount_pitch_deg", c.dvl_mount_pitch_rad, -90.0, 90.0);
+  m.degrees("dvl_mount_yaw_deg", c.dvl_mount_yaw_rad, -180.0, 180.0);
+  m.number("imu_max_gap_s", c.imu_max_gap_s, 1e-3, 10.0);
+  m.number("imu_timeout_s", c.imu_timeout_s, 1e-3, 60.0);
+  m.number("dvl_timeout_s", c.dvl_timeout_s, 1e-3, 60.0);
+  m.number("depth_timeout_s", c.depth_timeout_s, 1e-3, 60.0);
+  m.number("max_error_velocity_mps", c.max_error_velocity_mps, 1e-3, 10.0);
+  m.number("max_speed_mps", c.max_speed_mps, 0.01, 20.0);
+  m.number("dvl_velocity_sigma_mps", c.dvl_velocity_sigma_mps, 0.0, 1.0);
+  m.degrees("heading_sigma_deg", c.heading_sigma_rad, 0.0, 45.0);
+  m.number("heading_drift_rad2_per_s", c.heading_drift_rad2_per_s, 0.0, 1.0);
+  m.finish();
+}
+
+void readDevices(ConfigMap m, DevicesSection& d) {
+  ConfigMap dvl = m.map("dvl");
+  dvl.boolean("enabled", d.dvl_enabled);
+  dvl.choice("format", d.dvl_format, {"pd0", "pd6"});
+  readSerial(dvl, d.dvl);
+  dvl.finish();
+  ConfigMap depth = m.map("depth");
+  depth.boolean("enabled", d.depth_enabled);
+  depth.number("latitude_deg", d.depth_latitude_deg, -90.0, 90.0);
+  readSerial(depth, d.depth);
+  depth.finish();
+  ConfigMap imu = m.map("imu");
+  imu.boolean("enabled", d.imu_enabled);
+  imu.text("can_interface", d.imu.interface);
+  imu.text("unix_seqpacket", d.imu.unix_seqpacket);
+  readReconnect(imu.map("reconnect"), d.imu.reconnect);
+  if (!d.imu.interface.empty() && !d.imu.unix_seqpacket.empty())
+    imu.fail("unix_seqpacket", "give either can_interface or unix_seqpacket, not both");
+  imu.finish();
+  ConfigMap sonar = m.map("sonar");
+  sonar.boolean("enabled", d.sonar_enabled);
+  sonar.text("bind_address", d.sonar.bind_address);
+  readPort(sonar, "port", d.sonar.port, 0);
+  ConfigMap ex = sonar.map("range_extraction");
+  ex.boolean("median_denoise", d.range_extraction.median_denoise);
+  ex.number("noise_floor_percentile", d.range_extraction.noise_floor_percentile, 0.0, 1.0);
+  ex.number("threshold_above_noise", d.range_extraction.threshold_above_noise, 0.0, 255.0);
+  ex.integer("min_run_samples", d.range_extraction.min_run_samples, 1, 1000);
+  ex.number("min_range_m", d.range_extraction.min_range_m, 0.0, 100.0);
+  ex.number("max_range_m", d.range_extraction.max_range_m, 0.0, kInf);
+  ex.finish();
+  sonar.finish();
+  ConfigMap bs = m.map("backseat");
+  bs.boolean("enabled", d.backseat_enabled);
+  bs.text("address", d.backseat.address);
+  readPort(bs, "port", d.backseat.port, 1);
+  readReconnect(bs.map("reconnect"), d.backseat.reconnect);
+  bs.finish();
+  ConfigMap aux = m.map("aux");
+  aux.boolean("enabled", d.aux_enabled);
+  aux.text("address", d.aux.tcp_address);
+  readPort(aux, "port", d.aux.tcp_port, 1);
+  aux.integer("slave_id", d.aux.slave_id, 1, 247);
+  aux.finish();
+  m.finish();
+}
+
+template <class T>
+Status named(const char* section, const T& config) {
+  Status s = config.validate();
+  if (!s.ok()) return Error{std::string(section) + ": " + s.error().message};
+  return s;
+}
+
+}  // namespace
+
+Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& source_name,
+                                   const std::filesystem::path& base_dir) {
+  auto reader = ConfigReader::parse(text, source_name);
+  if (!reader) return reader.error();
+  VogdConfig c;
+  c.text = text;
+  ConfigMap root = (*reader)->root();
+  std::string source = "sim";
+  root.choice("source", source, {"sim", "devices"});
+  c.source = source == "sim" ? Source::kSim : Source::kDevices;
+
+  ConfigMap mission = root.map("mission");
+  mission.vector3("box_min_m", c.mission.box_min_m, -1e4, 1e4);
+  mission.vector3("box_max_m", c.mission.box_max_m, -1e4, 1e4);
+  std::string dir = c.mission.directory.string();
+  mission.text("directory", dir);
+  c.mission.directory = dir;
+  mission.boolean("start_on_launch", c.mission.start_on_launch);
+  if ((c.mission.box_max_m.array() <= c.mission.box_min_m.array()).any())
+    mission.fail("box_max_m", "must exceed box_min_m on every axis");
+  mission.finish();
+
+  ConfigMap sim = root.map("sim");
+  std::string scene;
+  sim.text("scene", scene, c.source == Source::kSim);
+  if (!scene.empty()) c.sim.scene = base_dir / scene;
+  sim.unsignedInteger("seed", c.sim.seed, 0, std::numeric_limits<std::uint64_t>::max());
+  sim.number("speedup", c.sim.speedup, 0.0, 1e6);
+  sim.number("odometry_noise_scale", c.sim.odometry_noise_scale, 0.0, 1e3);
+  sim.finish();
+
+  readMapping(root.map("mapping"), c.mapping);
+  ConfigMap merge = root.map("merge");
+  merge.number("remerge_translation_m", c.merge.remerge_translation_m, 0.0, 10.0);
+  merge.degrees("remerge_rotation_deg", c.merge.remerge_rotation_rad, 0.0, 180.0);
+  merge.finish();
+  readPlanner(root.map("planner"), c.planner);
+  readNav(root.map("nav"), c.nav);
+  readDevices(root.map("devices"), c.devices);
+
+  ConfigMap api = root.map("api");
+  api.text("bind_address", c.api.bind_address);
+  readPort(api, "port", c.api.port, 0);
+  std::uint64_t max_frame = c.api.max_frame_bytes;
+  api.unsignedInteger("max_frame_bytes", max_frame, 1024, 256u << 20);
+  c.api.max_frame_bytes = static_cast<std::uint32_t>(max_frame);
+  api.integer("max_clients", c.api.max_clients, 1, 10'000);
+  std::string secret;
+  api.text("secret_file", secret);
+  if (!secret.empty()) c.api.secret_file = base_dir / secret;
+  api.finish();
+  ConfigMap log = root.map("log");
+  log.choice("level", c.log_level, {"debug", "info", "warning", "error"});
+  log.finish();
+  root.finish();
+  if (Status s = (*reader)->status(); !s.ok()) return s.error();
+
+  // The exploration box goes to the planner; cross-field rules of each component.
+  c.planner.box_min_world_m = c.mission.box_min_m;
+  c.planner.box_max_world_m = c.mission.box_max_m;
+  c.planner.fan = c.mapping.builder.fan;
+  for (const Status& s : {named("mapping", c.mapping), named("merge", c.merge), named("planner", c.planner)}) {
+    if (!s.ok()) return Error{source_name + ": " + s.error().message};
+  }
+  if (Status s = c.nav.validate("nav"); !s.ok()) return Error{source_name + ": " + s.error().message};
+  if (c.source == Source::kDevices) {
+    const DevicesSection& d = c.devices;
+    if (d.dvl_enabled) {
+      if (Status s = d.dvl.validate("devices.dvl"); !s.ok()) return Error{source_name + ": " + s.error().message};
+    }
+    if (d.depth_enabled) {
+      if (Status s = d.depth.validate("devices.depth"); !s.ok()) return Error{source_name + ": " + s.error().message};
+    }
+    if (d.imu_enabled) {
+      if (Status s = d.imu.validate("devices.imu"); !s.ok()) return Error{source_name + ": " + s.error().message};
+    }
+    if (d.sonar_enabled) {
+      if (Status s = d.sonar.validate("devices.sonar"); !s.ok()) return Error{source_name + ": " + s.error().message};
+      if (Status s = named("devices.sonar.range_extraction", d.range_extraction); !s.ok())
+        return Error{source_name + ": " + s.error().message};
+    }
+    if (d.backseat_enabled) {
+      if (Status s = d.backseat.validate("devices.backseat"); !s.ok()) return Error{source_name + ": " + s.error().message};
+    }
+    if (d.aux_enabled) {
+      if (Status s = d.aux.validate("devices.aux"); !s.ok()) return Error{source_name + ": " + s.error().message};
+    }
+  }
+  return c;
+}
+
+Result<VogdConfig> loadVogdConfig(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) return Error{"cannot read configuration " + file.string()};
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseVogdConfig(text.str(), file.filename().string(), file.parent_path());
+}
+
+}  // namespace vog::app

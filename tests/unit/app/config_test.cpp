@@ -1,0 +1,171 @@
+// vogd's configuration: the shipped files load, every documented value is the default, and bad
+// input is refused with file:line, the full key and the allowed range.
+#include "test_support.hpp"
+#include "vog/app/vogd_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace vog::app {
+namespace {
+
+std::filesystem::path configDir() { return vog::test::sourceDir() / "config"; }
+
+Result<VogdConfig> parse(const std::string& text) { return parseVogdConfig(text, "test.yaml", configDir()); }
+
+std::string errorOf(const std::string& text) {
+  auto c = parse(text);
+  EXPECT_FALSE(c.ok()) << text;
+  return c.ok() ? std::string() : c.error().message;
+}
+
+TEST(VogdConfig, ShippedFilesLoad) {
+  for (const char* f : {"vogd.yaml", "sim/pilings.yaml", "sim/propeller.yaml"}) {
+    auto c = loadVogdConfig(configDir() / f);
+    ASSERT_TRUE(c.ok()) << f << ": " << c.error().message;
+    if (c->source == Source::kSim) {
+      EXPECT_TRUE(std::filesystem::exists(c->sim.scene)) << c->sim.scene;
+    }
+  }
+}
+
+// config/vogd.yaml states every key with its default value: parsing it must give the same structs
+// as parsing nothing (the device paths and addresses are examples, not defaults).
+TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
+  auto documented = loadVogdConfig(configDir() / "vogd.yaml");
+  auto defaults = parse("source: sim\nsim: {scene: scenes/pilings.yaml}\n");
+  ASSERT_TRUE(documented.ok()) << documented.error().message;
+  ASSERT_TRUE(defaults.ok()) << defaults.error().message;
+  const VogdConfig& a = *documented;
+  const VogdConfig& b = *defaults;
+  const auto& ga = a.mapping.builder.grid;
+  const auto& gb = b.mapping.builder.grid;
+  EXPECT_EQ(ga.resolution_m, gb.resolution_m);
+  EXPECT_EQ(ga.prob_hit, gb.prob_hit);
+  EXPECT_EQ(ga.prob_miss, gb.prob_miss);
+  EXPECT_EQ(ga.clamp_min, gb.clamp_min);
+  EXPECT_EQ(ga.clamp_max, gb.clamp_max);
+  EXPECT_EQ(ga.occupancy_threshold, gb.occupancy_threshold);
+  EXPECT_EQ(ga.max_range_m, gb.max_range_m);
+  EXPECT_EQ(ga.cloud_voxel_m, gb.cloud_voxel_m);
+  EXPECT_EQ(ga.normal_neighbours, gb.normal_neighbours);
+  const auto& sa = a.mapping.builder;
+  const auto& sb = b.mapping.builder;
+  EXPECT_EQ(sa.max_scans, sb.max_scans);
+  EXPECT_NEAR(sa.max_heading_change_rad, sb.max_heading_change_rad, 1e-12);
+  EXPECT_EQ(sa.max_position_stddev_m, sb.max_position_stddev_m);
+  EXPECT_NEAR(sa.max_yaw_stddev_rad, sb.max_yaw_stddev_rad, 1e-5);
+  EXPECT_EQ(sa.odometry_cov_x_m2_per_s, sb.odometry_cov_x_m2_per_s);
+  EXPECT_EQ(sa.odometry_cov_y_m2_per_s, sb.odometry_cov_y_m2_per_s);
+  EXPECT_EQ(sa.odometry_cov_yaw_rad2_per_s, sb.odometry_cov_yaw_rad2_per_s);
+  const auto& la = a.mapping.loop_closer;
+  const auto& lb = b.mapping.loop_closer;
+  EXPECT_EQ(a.mapping.loop_closures, b.mapping.loop_closures);
+  EXPECT_EQ(la.mode, lb.mode);
+  EXPECT_EQ(la.acceptance.max_fitness_m2, lb.acceptance.max_fitness_m2);
+  EXPECT_EQ(la.point_to_plane.max_direction_stddev, lb.point_to_plane.max_direction_stddev);
+  EXPECT_EQ(la.point_to_plane.sigma_point_m, lb.point_to_plane.sigma_point_m);
+  EXPECT_EQ(la.point_to_plane.max_correspondence_distance_m, lb.point_to_plane.max_correspondence_distance_m);
+  EXPECT_NEAR(la.max_heading_difference_rad, lb.max_heading_difference_rad, 1e-4);
+  EXPECT_NEAR(la.max_yaw_disagreement_rad, lb.max_yaw_disagreement_rad, 1e-4);
+  EXPECT_EQ(la.min_overlap_fraction, lb.min_overlap_fraction);
+  EXPECT_EQ(la.acceptance.odometry_cov_x_m2_per_s, lb.acceptance.odometry_cov_x_m2_per_s);
+  EXPECT_EQ(a.mapping.graph.loop_closure_loss_scale, b.mapping.graph.loop_closure_loss_scale);
+  EXPECT_EQ(a.mapping.depth_stddev_m, b.mapping.depth_stddev_m);
+  EXPECT_NEAR(a.mapping.roll_pitch_stddev_rad, b.mapping.roll_pitch_stddev_rad, 1e-9);
+  EXPECT_EQ(a.mapping.optimize_every_submap, b.mapping.optimize_every_submap);
+  EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
+  EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
+  const auto& pa = a.planner;
+  const auto& pb = b.planner;
+  EXPECT_EQ(pa.collision_box_m, pb.collision_box_m);
+  EXPECT_EQ(pa.planner_range_m, pb.planner_range_m);
+  EXPECT_EQ(pa.lambda, pb.lambda);
+  EXPECT_EQ(pa.max_edge_m, pb.max_edge_m);
+  EXPECT_EQ(pa.n_max, pb.n_max);
+  EXPECT_EQ(pa.n_tol, pb.n_tol);
+  EXPECT_EQ(pa.max_samples, pb.max_samples);
+  EXPECT_NEAR(pa.max_heading_change_rad, pb.max_heading_change_rad, 1e-12);
+  EXPECT_EQ(pa.v_max_mps, pb.v_max_mps);
+  EXPECT_NEAR(pa.yaw_rate_radps, pb.yaw_rate_radps, 1e-5);
+  EXPECT_EQ(pa.xy_sample_share, pb.xy_sample_share);
+  EXPECT_EQ(pa.gain_unknown, pb.gain_unknown);
+  EXPECT_EQ(pa.gain_free, pb.gain_free);
+  EXPECT_EQ(pa.gain_occupied, pb.gain_occupied);
+  EXPECT_EQ(pa.gain_threshold, pb.gain_threshold);
+  EXPECT_EQ(pa.seed, pb.seed);
+  const auto& na = a.nav;
+  const auto& nb = b.nav;
+  EXPECT_NEAR(na.dvl_mount_yaw_rad, nb.dvl_mount_yaw_rad, 1e-12);
+  EXPECT_EQ(na.imu_max_gap_s, nb.imu_max_gap_s);
+  EXPECT_EQ(na.imu_timeout_s, nb.imu_timeout_s);
+  EXPECT_EQ(na.dvl_timeout_s, nb.dvl_timeout_s);
+  EXPECT_EQ(na.depth_timeout_s, nb.depth_timeout_s);
+  EXPECT_EQ(na.max_error_velocity_mps, nb.max_error_velocity_mps);
+  EXPECT_EQ(na.max_speed_mps, nb.max_speed_mps);
+  EXPECT_EQ(na.dvl_velocity_sigma_mps, nb.dvl_velocity_sigma_mps);
+  EXPECT_NEAR(na.heading_sigma_rad, nb.heading_sigma_rad, 1e-5);
+  EXPECT_EQ(na.heading_drift_rad2_per_s, nb.heading_drift_rad2_per_s);
+  EXPECT_EQ(a.devices.range_extraction.threshold_above_noise, b.devices.range_extraction.threshold_above_noise);
+  EXPECT_EQ(a.devices.range_extraction.min_range_m, b.devices.range_extraction.min_range_m);
+  EXPECT_EQ(a.api.max_frame_bytes, b.api.max_frame_bytes);
+  EXPECT_EQ(a.api.max_clients, b.api.max_clients);
+  EXPECT_EQ(a.log_level, b.log_level);
+}
+
+TEST(VogdConfig, UnknownKeyIsRefusedWithItsLine) {
+  const std::string e = errorOf("source: devices\nmapping:\n  grid:\n    resolution: 0.1\n");
+  EXPECT_NE(e.find("test.yaml:4: mapping.grid.resolution: unknown key"), std::string::npos) << e;
+  EXPECT_NE(e.find("resolution_m"), std::string::npos) << e;  // lists what is allowed
+  EXPECT_NE(errorOf("source: devices\nplaner: {lambda: 1}\n").find("test.yaml:2: planer: unknown key"), std::string::npos);
+}
+
+TEST(VogdConfig, OutOfRangeValueNamesTheRange) {
+  const std::string e = errorOf("source: devices\nmapping:\n  grid: {resolution_m: 5}\n");
+  EXPECT_NE(e.find("test.yaml:3: mapping.grid.resolution_m: must be in [0.01, 1], got 5"), std::string::npos) << e;
+  EXPECT_NE(errorOf("source: devices\nplanner: {lambda: -0.5}\n").find("planner.lambda: must be in [0, 100], got -0.5"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\napi: {port: 70000}\n").find("api.port: must be in [0, 65535], got 70000"),
+            std::string::npos);
+}
+
+TEST(VogdConfig, WrongTypesAndSyntaxAreRefused) {
+  EXPECT_NE(errorOf("source: devices\nplanner: {n_max: many}\n").find("planner.n_max: must be an integer, got 'many'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nplanner: {n_max: 2.5}\n").find("must be an integer"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmapping: {loop_closures: {enabled: maybe}}\n").find("must be true or false"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmission: {box_min_m: [1, 2]}\n").find("mission.box_min_m: must be a list of 3 numbers"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: satellite\n").find("source: must be one of sim, devices, got 'satellite'"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmapping: [1, 2]\n").find("mapping: must be a mapping"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmapping:\n  grid: {resolution_m: 0.1\n").find("test.yaml:"), std::string::npos);
+  EXPECT_NE(errorOf("- 1\n- 2\n").find("must be a mapping of sections"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nplanner: {lambda: .nan}\n").find("planner.lambda: must be a number"),
+            std::string::npos);
+}
+
+TEST(VogdConfig, CrossFieldRulesAreChecked) {
+  EXPECT_NE(errorOf("source: devices\nmission: {box_min_m: [0, 0, 0], box_max_m: [1, 1, 0]}\n")
+                .find("mission.box_max_m: must exceed box_min_m"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\ndevices: {imu: {can_interface: can0, unix_seqpacket: /run/x}}\n")
+                .find("devices.imu.unix_seqpacket: give either"),
+            std::string::npos);
+  // A component's own rule (clamping bounds around the occupancy threshold), named by section.
+  const std::string e = errorOf("source: devices\nmapping:\n  grid: {clamp_max: 0.6, occupancy_threshold: 0.7}\n");
+  EXPECT_NE(e.find("mapping"), std::string::npos) << e;
+  // The simulator needs a scene; devices need a device path.
+  EXPECT_NE(errorOf("source: sim\n").find("sim.scene: missing required key"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\n").find("devices.dvl"), std::string::npos);
+}
+
+TEST(VogdConfig, UnreadableFileIsNamed) {
+  auto c = loadVogdConfig("/nonexistent/vogd.yaml");
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("/nonexistent/vogd.yaml"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vog::app
