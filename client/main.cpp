@@ -7,6 +7,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   vog::client::CommandAction action;
   vog::client::addDecodeCommand(app, action);
+  vog::client::addStatusCommand(app, action);
+  vog::client::addWatchCommand(app, action);
+  vog::client::addSnapshotCommand(app, action);
   CLI11_PARSE(app, argc, argv);
   return action ? action() : 1;
 }

@@ -2,7 +2,11 @@
 
 #include "vog/v1/map.pb.h"
 
+#include <octomap/OcTree.h>
+
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 
 namespace vog::api {
@@ -97,6 +101,62 @@ map::VoxelValue MapMirror::at(const map::VoxelKey& key) const {
   if (!it->second.known[idx]) return {};
   const double l = static_cast<double>(it->second.log_odds[idx]);
   return {l, bounds_.classify(l)};
+}
+
+std::size_t MapMirror::knownVoxelCount() const {
+  std::size_t n = 0;
+  for (const auto& [origin, block] : blocks_) n += static_cast<std::size_t>(std::count(block.known.begin(), block.known.end(), true));
+  return n;
+}
+
+Result<std::unique_ptr<octomap::OcTree>> MapMirror::toOcTree() const {
+  if (!(resolution_m_ > 0.0)) return Error{"the map copy is empty (no delta applied yet)"};
+  auto tree = std::make_unique<octomap::OcTree>(resolution_m_);
+  // OctoMap stores probabilities for its thresholds; the delta carries their log-odds.
+  const auto probability = [](double l) { return 1.0 / (1.0 + std::exp(-l)); };
+  tree->setClampingThresMin(probability(bounds_.min));
+  tree->setClampingThresMax(probability(bounds_.max));
+  tree->setOccupancyThres(probability(bounds_.occupied));
+  // OctoMap keys are 16-bit with the origin at 2^15 (OcTreeKey); voxels beyond are not representable.
+  constexpr int kKeyOffset = 32768;
+  std::size_t skipped = 0;
+  for (const auto& [origin, block] : blocks_) {
+    for (int i = 0; i < kVoxels; ++i) {
+      const auto idx = static_cast<std::size_t>(i);
+      if (!block.known[idx]) continue;
+      const int key[3] = {std::get<0>(origin) * 8 + (i & 7), std::get<1>(origin) * 8 + ((i >> 3) & 7),
+                          std::get<2>(origin) * 8 + (i >> 6)};
+      octomap::OcTreeKey k;
+      bool inside = true;
+      for (unsigned a = 0; a < 3; ++a) {
+        const int v = key[a] + kKeyOffset;
+        inside = inside && v >= 0 && v <= 0xFFFF;
+        k[a] = static_cast<octomap::key_type>(v & 0xFFFF);
+      }
+      if (!inside) {
+        ++skipped;
+        continue;
+      }
+      tree->setNodeValue(k, block.log_odds[idx], true);
+    }
+  }
+  if (skipped > 0) return Error{std::to_string(skipped) + " voxels lie outside OctoMap's key range"};
+  tree->updateInnerOccupancy();
+  return tree;
+}
+
+Status MapMirror::writeOt(const std::filesystem::path& file) const {
+  auto tree = toOcTree();
+  if (!tree) return tree.error();
+  if (!(*tree)->write(file.string())) return Error{"cannot write " + file.string()};
+  return {};
+}
+
+Status MapMirror::writeBt(const std::filesystem::path& file) const {
+  auto tree = toOcTree();
+  if (!tree) return tree.error();
+  if (!(*tree)->writeBinary(file.string())) return Error{"cannot write " + file.string()};
+  return {};
 }
 
 }  // namespace vog::api

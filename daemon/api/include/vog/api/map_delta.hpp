@@ -7,8 +7,14 @@
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <map>
+#include <memory>
 #include <tuple>
+
+namespace octomap {
+class OcTree;
+}
 
 namespace vog::v1 {
 class MapDelta;
@@ -37,6 +43,14 @@ class MapMirror {
   std::size_t blockCount() const { return blocks_.size(); }
   // Clamped log-odds and status of a voxel key.
   map::VoxelValue at(const map::VoxelKey& key) const;
+  std::size_t knownVoxelCount() const;
+
+  // OctoMap export as MergedMap::toOcTree does it (same keys, clamped log-odds): .ot keeps the
+  // log-odds, .bt the max-likelihood map; both open in octovis. An empty mirror has no resolution and
+  // is an error.
+  Result<std::unique_ptr<octomap::OcTree>> toOcTree() const;
+  Status writeOt(const std::filesystem::path& file) const;
+  Status writeBt(const std::filesystem::path& file) const;
 
  private:
   std::map<std::tuple<int, int, int>, Block> blocks_;

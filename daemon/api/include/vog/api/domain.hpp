@@ -1,0 +1,138 @@
+#pragma once
+// The domain side of vogd's API: plain C++ types (no protobuf) that the daemon fills and the client
+// library returns, and the `ApiBackend` interface the daemon implements. proto/vog/v1/api.proto is
+// the wire form; vog/api/convert.hpp maps one to the other at the edge (STYLE 14).
+
+#include "vog/geometry/pose.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/map/merged_map.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vog::api {
+
+// Mission lifecycle (issue 7): idle -> exploring -> returning -> complete, plus paused and aborted.
+enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted };
+enum class PlannerState : std::uint8_t { kIdle, kPlanning, kFollowing, kFinished, kFailed };
+enum class DeviceState : std::uint8_t { kOk, kDegraded, kFailed, kDisconnected };
+enum class Role : std::uint8_t { kObserver, kOperator };
+
+const char* toString(MissionState s);
+const char* toString(PlannerState s);
+const char* toString(DeviceState s);
+const char* toString(Role r);
+
+struct DeviceHealth {
+  std::string name;
+  DeviceState state = DeviceState::kOk;
+  std::string detail;
+  std::int64_t last_stamp_ns = 0;
+  std::uint64_t messages = 0;
+  std::uint64_t errors = 0;
+};
+
+struct StatusReport {
+  std::int64_t stamp_ns = 0;
+  MissionState mission_state = MissionState::kIdle;
+  geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();
+  Eigen::Vector3d sigma_xyz_m = Eigen::Vector3d::Zero();
+  double sigma_yaw_rad = 0.0;
+  std::vector<DeviceHealth> devices;
+  std::uint32_t n_submaps = 0;
+  std::uint32_t n_closures = 0;
+  PlannerState planner_state = PlannerState::kIdle;
+  std::uint64_t map_version = 0;
+};
+
+struct SubmapInfo {
+  std::uint32_t id = 0;
+  geometry::Pose3 T_world_submap = geometry::Pose3::Identity();
+  std::uint32_t n_scans = 0;
+  std::int64_t first_stamp_ns = 0;
+  std::int64_t last_stamp_ns = 0;
+  bool closed = false;
+};
+
+// A reconstruction point in the world frame; normal is zero when not computed.
+struct CloudPoint {
+  Eigen::Vector3f p_world_m = Eigen::Vector3f::Zero();
+  Eigen::Vector3f normal_world = Eigen::Vector3f::Zero();
+};
+using Cloud = std::vector<CloudPoint>;
+
+struct Waypoint {
+  std::uint64_t seq = 0;  // assigned by ApiServer::publishWaypoint (1, 2, ...)
+  std::int64_t stamp_ns = 0;
+  geometry::Pose3 T_world_target = geometry::Pose3::Identity();
+  double speed_mps = 0.0;
+  std::uint64_t dropped = 0;  // filled on the client side: waypoints this session lost so far
+};
+
+struct PoseUpdate {
+  std::uint64_t seq = 0;
+  std::int64_t stamp_ns = 0;
+  geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();
+  std::uint64_t dropped = 0;
+};
+
+struct StatusUpdate {
+  std::uint64_t seq = 0;
+  StatusReport status;
+  std::uint64_t dropped = 0;
+};
+
+// Exploration box in the world frame.
+struct ExplorationBox {
+  Eigen::Vector3d min_world_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max_world_m = Eigen::Vector3d::Zero();
+
+  // Finite corners with min < max on every axis, each side at most 10 km.
+  Status validate() const;
+};
+
+struct MissionCommand {
+  enum class Kind : std::uint8_t { kSetBox, kStart, kPause, kResume, kAbort, kReturnHome };
+  Kind kind = Kind::kStart;
+  ExplorationBox box;  // used by kSetBox only
+};
+const char* toString(MissionCommand::Kind k);
+
+struct Subscriptions {
+  bool waypoints = false;
+  bool poses = false;
+  bool status = false;
+};
+
+// What vogd gives the API. Every method is called on the API's io_context thread, so each must be
+// cheap: hand out immutable snapshots (the merged map's shared_ptr<const>), copies of small state,
+// or enqueue a command for the mission thread and return its accepted state.
+class ApiBackend {
+ public:
+  virtual ~ApiBackend() = default;
+  virtual StatusReport status() const = 0;
+  // The newest merged-map snapshot; null while there is no map yet.
+  virtual std::shared_ptr<const map::MergedMap> mapSnapshot() const = 0;
+  virtual std::vector<SubmapInfo> submaps() const = 0;
+  // The newest reconstruction; null while there is none.
+  virtual std::shared_ptr<const Cloud> cloud() const = 0;
+  // An operator's command (already authenticated and validated): the mission state after it, or an
+  // error saying why the mission refused it (e.g. "start while exploring").
+  virtual Result<MissionState> command(const MissionCommand& command) = 0;
+  virtual std::string configText() const = 0;
+};
+
+// Library code never prints: the server reports security-relevant and connection events here.
+enum class LogLevel : std::uint8_t { kDebug, kInfo, kWarning, kError };
+class ApiLogger {
+ public:
+  virtual ~ApiLogger() = default;
+  virtual void log(LogLevel level, std::string_view message) = 0;
+};
+
+}  // namespace vog::api

@@ -1,0 +1,284 @@
+// vog-bench api: vogd's API on loopback. 32 observers subscribed to every stream and 1 operator
+// sending commands while waypoints and poses are published: waypoint latency from publishWaypoint()
+// to the client's receipt (p50/p99/max; issue 7 target p99 <= 10 ms). Then a snapshot of a merged
+// map of about one million known voxels fetched from version 0 by one client (target <= 1 s).
+// Server and clients share this process (and its 2 cores); RSS and CPU are the whole process's.
+#include "bench_registry.hpp"
+
+#include "vog/api/api_server.hpp"
+#include "vog/client/api_client.hpp"
+
+#include <CLI/CLI.hpp>
+#include <asio.hpp>
+#include <octomap/OcTree.h>
+
+#include <sys/resource.h>
+
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+namespace {
+
+using namespace vog;
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kSecret = "bench-operator-secret-0123";
+
+std::int64_t nowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
+
+// A cube of side^3 voxels at the thesis resolution: every fifth voxel occupied, the rest free, so
+// every block is fully known (the worst case for a snapshot: 2 KB of values per block).
+Result<std::shared_ptr<const map::MergedMap>> buildCubeMap(int side) {
+  const map::GridConfig config;
+  auto tree = std::make_unique<octomap::OcTree>(config.resolution_m);
+  const double r = config.resolution_m;
+  for (int x = 0; x < side; ++x) {
+    for (int y = 0; y < side; ++y) {
+      for (int z = 0; z < side; ++z) {
+        const bool occupied = (x * 7 + y * 13 + z * 17) % 5 == 0;
+        tree->updateNode(octomap::point3d(static_cast<float>((x + 0.5) * r), static_cast<float>((y + 0.5) * r),
+                                          static_cast<float>((z + 0.5) * r)),
+                         occupied, true);
+      }
+    }
+  }
+  tree->updateInnerOccupancy();
+  auto grid = map::LocalGrid::fromTree(config, std::move(tree));
+  if (!grid) return grid.error();
+  auto merged = map::MergedMap::create(config);
+  if (!merged) return merged.error();
+  map::SubmapEntry entry;
+  entry.id = 0;
+  entry.grid = std::shared_ptr<const map::LocalGrid>(std::move(*grid));
+  if (Status s = (*merged)->add(entry); !s.ok()) return s.error();
+  return (*merged)->snapshot();
+}
+
+class BenchBackend final : public api::ApiBackend {
+ public:
+  explicit BenchBackend(std::shared_ptr<const map::MergedMap> map) : map_(std::move(map)) {}
+  api::StatusReport status() const override {
+    api::StatusReport s;
+    s.mission_state = state_.load();
+    s.devices = {{"dvl", api::DeviceState::kOk, "", 0, 100, 0}, {"sonar", api::DeviceState::kOk, "", 0, 50, 0}};
+    s.map_version = map_->version();
+    return s;
+  }
+  std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return map_; }
+  std::vector<api::SubmapInfo> submaps() const override { return {}; }
+  std::shared_ptr<const api::Cloud> cloud() const override { return nullptr; }
+  Result<api::MissionState> command(const api::MissionCommand& c) override {
+    state_ = c.kind == api::MissionCommand::Kind::kPause ? api::MissionState::kPaused : api::MissionState::kExploring;
+    return state_.load();
+  }
+  std::string configText() const override { return "api: {}\n"; }
+
+ private:
+  std::shared_ptr<const map::MergedMap> map_;
+  std::atomic<api::MissionState> state_{api::MissionState::kExploring};
+};
+
+double rssMb() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
+double cpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+}  // namespace
+
+VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 operator, 1M-voxel snapshot time") {
+  int observers = 32;
+  int waypoints = 2000;
+  double rate_hz = 200.0;
+  int side = 100;
+  bool json = false;
+  CLI::App app{"vog-bench api"};
+  app.add_option("--observers", observers, "observer clients subscribed to every stream")->check(CLI::Range(1, 200));
+  app.add_option("--waypoints", waypoints, "waypoints published")->check(CLI::Range(10, 1000000));
+  app.add_option("--rate", rate_hz, "waypoints (and poses) published per second")->check(CLI::Range(1.0, 100000.0));
+  app.add_option("--side", side, "the snapshot map is a cube of side^3 voxels")->check(CLI::Range(8, 400));
+  app.add_flag("--json", json, "print JSON (the only output format)");
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  const bench::Stopwatch build_clock;
+  auto map = buildCubeMap(side);
+  if (!map) {
+    std::fprintf(stderr, "vog-bench api: %s\n", map.error().message.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "built a map of %zu known voxels in %zu blocks in %.1f s\n", (*map)->knownVoxelCount(),
+               (*map)->blockCount(), build_clock.seconds());
+  BenchBackend backend(*map);
+
+  asio::io_context io;
+  api::ApiServerConfig config;
+  config.dispatch.operator_secret = kSecret;
+  config.max_clients = static_cast<std::size_t>(observers) + 8;
+  auto server = api::ApiServer::create(io, backend, config);
+  if (!server) {
+    std::fprintf(stderr, "vog-bench api: %s\n", server.error().message.c_str());
+    return 1;
+  }
+  const auto port = (*server)->listen("127.0.0.1", 0);
+  if (!port) {
+    std::fprintf(stderr, "vog-bench api: %s\n", port.error().message.c_str());
+    return 1;
+  }
+  std::thread io_thread([&] { io.run(); });
+  const double cpu0 = cpuSeconds();
+
+  // Observers: each records the latency of every waypoint it receives.
+  std::mutex mutex;
+  std::vector<double> latencies_ms;
+  std::atomic<int> ready{0};
+  std::atomic<std::uint64_t> received{0};
+  std::atomic<std::uint64_t> client_drops{0};
+  std::atomic<int> failures{0};
+  std::vector<std::thread> threads;
+  for (int i = 0; i < observers; ++i) {
+    threads.emplace_back([&] {
+      auto c = client::ApiClient::connect("127.0.0.1", *port);
+      if (!c || !(*c)->subscribe({true, true, true}).ok()) {
+        ++failures;
+        ++ready;
+        return;
+      }
+      ++ready;
+      std::vector<double> mine;
+      mine.reserve(static_cast<std::size_t>(waypoints));
+      std::uint64_t last_dropped = 0;
+      for (;;) {
+        auto m = (*c)->nextStream(3s);
+        if (!m) break;  // the publisher is done
+        if (const auto* w = std::get_if<api::Waypoint>(&*m)) {
+          mine.push_back(static_cast<double>(nowNs() - w->stamp_ns) * 1e-6);
+          last_dropped = w->dropped;
+          if (w->seq == static_cast<std::uint64_t>(waypoints)) break;
+        }
+      }
+      received += mine.size();
+      client_drops += last_dropped;
+      std::lock_guard lock(mutex);
+      latencies_ms.insert(latencies_ms.end(), mine.begin(), mine.end());
+    });
+  }
+  // The operator: authenticated, pausing and resuming and reading status throughout.
+  std::atomic<bool> publishing{true};
+  std::atomic<int> commands{0};
+  threads.emplace_back([&] {
+    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    if (!c || !(*c)->authenticate(kSecret).ok()) {
+      ++failures;
+      ++ready;
+      return;
+    }
+    ++ready;
+    bool pause = true;
+    while (publishing) {
+      api::MissionCommand cmd;
+      cmd.kind = pause ? api::MissionCommand::Kind::kPause : api::MissionCommand::Kind::kResume;
+      pause = !pause;
+      if (!(*c)->command(cmd).ok() || !(*c)->status().ok()) {
+        ++failures;
+        return;
+      }
+      ++commands;
+      std::this_thread::sleep_for(20ms);
+    }
+  });
+  while (ready < observers + 1) std::this_thread::sleep_for(1ms);
+
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
+  Clock::time_point next = Clock::now();
+  for (int i = 0; i < waypoints; ++i) {
+    std::this_thread::sleep_until(next);
+    next += period;
+    api::Waypoint w;
+    w.stamp_ns = nowNs();
+    w.T_world_target = geometry::poseFromXyzRpy(0.01 * i, 1.0, -2.0, 0.0, 0.0, 0.001 * i);
+    w.speed_mps = 0.25;
+    (*server)->publishWaypoint(w);
+    api::PoseUpdate p;
+    p.stamp_ns = w.stamp_ns;
+    p.T_world_vehicle = w.T_world_target;
+    (*server)->publishPose(p);
+    if (i % 50 == 0) (*server)->publishStatus(backend.status());
+  }
+  publishing = false;
+  for (auto& t : threads) t.join();
+  const double stream_cpu_s = cpuSeconds() - cpu0;
+
+  // Snapshot: a full map from version 0, three times.
+  std::vector<double> snapshot_s;
+  std::size_t voxels = 0;
+  for (int rep = 0; rep < 3; ++rep) {
+    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    if (!c) {
+      std::fprintf(stderr, "vog-bench api: %s\n", c.error().message.c_str());
+      return 1;
+    }
+    api::MapMirror mirror;
+    const bench::Stopwatch sw;
+    if (Status s = (*c)->fetchMap(mirror); !s.ok()) {
+      std::fprintf(stderr, "vog-bench api: map fetch failed: %s\n", s.error().message.c_str());
+      return 1;
+    }
+    snapshot_s.push_back(sw.seconds());
+    voxels = 0;
+    (*map)->forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
+      voxels += (mirror.at(k).status == v.status) ? 1 : 0;
+    });
+    if (voxels != (*map)->knownVoxelCount() || mirror.blockCount() != (*map)->blockCount()) {
+      std::fprintf(stderr, "vog-bench api: the fetched map differs from the server's\n");
+      return 1;
+    }
+  }
+  const api::ApiServerStats stats = (*server)->stats();
+  (*server)->stop();
+  io.stop();
+  io_thread.join();
+
+  bench::JsonObject out;
+  out.add("observers", observers);
+  out.add("operator_commands", commands.load());
+  out.add("client_failures", failures.load());
+  out.add("waypoints_published", waypoints);
+  out.add("publish_rate_hz", rate_hz);
+  out.add("waypoints_received", static_cast<std::int64_t>(received.load()));
+  out.add("waypoints_expected", static_cast<std::int64_t>(waypoints) * observers);
+  out.add("waypoint_drops_server", static_cast<std::int64_t>(stats.waypoint_drops));
+  out.add("pose_status_coalesced_server", static_cast<std::int64_t>(stats.stream_drops - stats.waypoint_drops));
+  out.add("waypoint_latency_p50_ms", bench::percentile(latencies_ms, 0.5));
+  out.add("waypoint_latency_p99_ms", bench::percentile(latencies_ms, 0.99));
+  out.add("waypoint_latency_max_ms", bench::percentile(latencies_ms, 1.0));
+  out.add("waypoint_latency_p99_target_ms", 10.0);
+  out.add("snapshot_known_voxels", static_cast<std::int64_t>(voxels));
+  out.add("snapshot_blocks", static_cast<std::int64_t>((*map)->blockCount()));
+  out.add("snapshot_s_median", bench::median(snapshot_s));
+  out.add("snapshot_target_s", 1.0);
+  out.add("process_cpu_s_streaming", stream_cpu_s);
+  out.add("process_rss_peak_mb", rssMb());
+  out.add("note", std::string("server and all clients in one process on loopback"));
+  std::printf("%s\n", out.str().c_str());
+  return failures.load() == 0 ? 0 : 1;
+}

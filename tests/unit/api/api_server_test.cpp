@@ -1,0 +1,639 @@
+// ApiServer and ApiClient over real loopback sockets, with a real MergedMap behind the backend.
+#include "vog/api/api_server.hpp"
+#include "vog/api/framing.hpp"
+#include "vog/client/api_client.hpp"
+
+#include "fake_backend.hpp"
+#include "test_support.hpp"
+
+#include <asio.hpp>
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <thread>
+
+namespace vog::api {
+namespace {
+
+using namespace std::chrono_literals;
+using client::ApiClient;
+
+constexpr const char* kSecret = "operator-secret-0123456789";
+
+ApiServerConfig defaultConfig() {
+  ApiServerConfig c;
+  c.dispatch.operator_secret = kSecret;
+  c.dispatch.server_name = "vogd-test";
+  c.dispatch.max_frame_bytes = 1u << 20;
+  c.close_timeout = 500ms;
+  return c;
+}
+
+class ApiServerTest : public ::testing::Test {
+ protected:
+  void start(const ApiServerConfig& config = defaultConfig()) {
+    server_ = ApiServer::create(io_, backend_, config, &logger_, std::make_unique<SeededNonceSource>(11)).value();
+    port_ = server_->listen("127.0.0.1", 0).value();
+    thread_ = std::thread([this] { io_.run(); });
+  }
+  void TearDown() override {
+    if (!server_) return;
+    server_->stop();
+    asio::post(io_, [this] { io_.stop(); });
+    thread_.join();
+  }
+  std::unique_ptr<ApiClient> connect(client::ClientConfig config = {}) {
+    config.timeout = 5s;
+    auto c = ApiClient::connect("127.0.0.1", port_, config);
+    EXPECT_TRUE(c.ok()) << (c.ok() ? "" : c.error().message);
+    return c.ok() ? std::move(*c) : nullptr;
+  }
+  // Waits until the server closes `c`'s connection (a receive fails with "closed").
+  static bool closedByServer(ApiClient& c) {
+    for (int i = 0; i < 50; ++i) {
+      auto r = c.receive(2s);
+      if (!r.ok()) return c.broken();
+    }
+    return false;
+  }
+  // Waits for a condition on the server's stats (updated on its thread).
+  template <class Pred>
+  bool eventually(Pred pred) {
+    for (int i = 0; i < 400; ++i) {
+      if (pred(server_->stats())) return true;
+      std::this_thread::sleep_for(5ms);
+    }
+    return false;
+  }
+
+  test::FakeBackend backend_;
+  test::RecordingLogger logger_;
+  asio::io_context io_;
+  std::unique_ptr<ApiServer> server_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+};
+
+void expectMirrorEquals(const MapMirror& mirror, const map::MergedMap& merged) {
+  std::size_t n = 0;
+  merged.forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
+    const map::VoxelValue m = mirror.at(k);
+    ASSERT_EQ(m.status, v.status) << k.transpose();
+    // The wire carries float32 log-odds (map.proto).
+    ASSERT_EQ(static_cast<float>(m.log_odds), static_cast<float>(v.log_odds)) << k.transpose();
+    ++n;
+  });
+  EXPECT_GT(n, 1000u);
+  EXPECT_EQ(mirror.blockCount(), merged.blockCount());
+  EXPECT_EQ(mirror.version(), merged.version());
+  EXPECT_EQ(mirror.resolution(), merged.resolution());
+}
+
+TEST_F(ApiServerTest, EveryReadCallRoundTrips) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+
+  const auto info = c->hello().value();
+  EXPECT_EQ(info.protocol_version, 1u);
+  EXPECT_EQ(info.server_name, "vogd-test");
+  EXPECT_EQ(info.max_frame_bytes, 1u << 20);
+  EXPECT_EQ(info.role, Role::kObserver);
+  EXPECT_TRUE(info.operator_enabled);
+
+  const StatusReport want = backend_.status();
+  const StatusReport got = c->status().value();
+  EXPECT_EQ(got.stamp_ns, want.stamp_ns);
+  EXPECT_EQ(got.mission_state, want.mission_state);
+  EXPECT_TRUE(got.T_world_vehicle.isApprox(want.T_world_vehicle, 1e-12));
+  EXPECT_EQ(got.sigma_xyz_m, want.sigma_xyz_m);
+  EXPECT_EQ(got.sigma_yaw_rad, want.sigma_yaw_rad);
+  ASSERT_EQ(got.devices.size(), 2u);
+  EXPECT_EQ(got.devices[1].name, "sonar");
+  EXPECT_EQ(got.devices[1].state, DeviceState::kDegraded);
+  EXPECT_EQ(got.devices[1].detail, "3 frames late");
+  EXPECT_EQ(got.devices[1].errors, 3u);
+  EXPECT_EQ(got.devices[0].last_stamp_ns, 123'000'000'000);
+  EXPECT_EQ(got.n_submaps, 3u);
+  EXPECT_EQ(got.n_closures, 1u);
+  EXPECT_EQ(got.planner_state, PlannerState::kFollowing);
+  EXPECT_EQ(got.map_version, backend_.mapSnapshot()->version());
+
+  const auto want_submaps = backend_.submaps();
+  const auto got_submaps = c->submaps().value();
+  ASSERT_EQ(got_submaps.size(), want_submaps.size());
+  for (std::size_t i = 0; i < want_submaps.size(); ++i) {
+    EXPECT_EQ(got_submaps[i].id, want_submaps[i].id);
+    EXPECT_TRUE(got_submaps[i].T_world_submap.isApprox(want_submaps[i].T_world_submap, 1e-12));
+    EXPECT_EQ(got_submaps[i].n_scans, want_submaps[i].n_scans);
+    EXPECT_EQ(got_submaps[i].n_scans, 15u);
+    EXPECT_EQ(got_submaps[i].last_stamp_ns, want_submaps[i].last_stamp_ns);
+    EXPECT_TRUE(got_submaps[i].closed);
+  }
+
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> progress;
+  const Cloud cloud = c->cloud([&](std::uint64_t n, std::uint64_t total) { progress.emplace_back(n, total); }).value();
+  const Cloud& want_cloud = *backend_.cloudData();
+  ASSERT_EQ(cloud.size(), want_cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(cloud[i].p_world_m, want_cloud[i].p_world_m);
+    ASSERT_EQ(cloud[i].normal_world, want_cloud[i].normal_world);
+  }
+  ASSERT_FALSE(progress.empty());
+  EXPECT_EQ(progress.back(), std::make_pair(std::uint64_t{1000}, std::uint64_t{1000}));
+
+  EXPECT_EQ(c->configText().value(), backend_.configText());
+  const Subscriptions s = c->subscribe({true, false, true}).value();
+  EXPECT_TRUE(s.waypoints);
+  EXPECT_FALSE(s.poses);
+  EXPECT_TRUE(s.status);
+}
+
+TEST_F(ApiServerTest, OperatorCommandsDriveTheMissionAfterAuthentication) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  ASSERT_EQ(c->authenticate(kSecret).value(), Role::kOperator);
+
+  MissionCommand set_box;
+  set_box.kind = MissionCommand::Kind::kSetBox;
+  set_box.box.min_world_m = {-6.0, -6.5, -4.0};
+  set_box.box.max_world_m = {6.0, 6.25, -0.5};
+  EXPECT_EQ(c->command(set_box).value(), MissionState::kIdle);
+  EXPECT_EQ(backend_.box().min_world_m, set_box.box.min_world_m);
+  EXPECT_EQ(backend_.box().max_world_m, set_box.box.max_world_m);
+
+  using K = MissionCommand::Kind;
+  const std::vector<std::pair<K, MissionState>> steps = {{K::kStart, MissionState::kExploring},
+                                                          {K::kPause, MissionState::kPaused},
+                                                          {K::kResume, MissionState::kExploring},
+                                                          {K::kReturnHome, MissionState::kReturning},
+                                                          {K::kAbort, MissionState::kAborted}};
+  for (const auto& [kind, state] : steps) {
+    MissionCommand cmd;
+    cmd.kind = kind;
+    EXPECT_EQ(c->command(cmd).value(), state) << toString(kind);
+  }
+  EXPECT_EQ(c->status().value().mission_state, MissionState::kAborted);
+
+  // The mission refuses a command in the wrong state: REJECTED with the backend's reason.
+  MissionCommand resume;
+  resume.kind = K::kResume;
+  const auto refused = c->command(resume);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_REJECTED);
+  EXPECT_NE(refused.error().message.find("resume while aborted"), std::string::npos) << refused.error().message;
+
+  // An invalid box never reaches the backend.
+  MissionCommand bad_box = set_box;
+  bad_box.box.max_world_m.x() = -7.0;
+  const auto invalid = c->command(bad_box);
+  ASSERT_FALSE(invalid.ok());
+  EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_INVALID_ARGUMENT);
+  EXPECT_NE(invalid.error().message.find("min_x_m"), std::string::npos) << invalid.error().message;
+  EXPECT_EQ(backend_.commands().size(), 6u);
+}
+
+TEST_F(ApiServerTest, MapThroughTheClientEqualsTheServersMapFullThenIncremental) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  MapMirror mirror;
+  std::vector<std::uint64_t> received;
+  std::uint64_t total = 0;
+  const auto progress = [&](std::uint64_t n, std::uint64_t t) {
+    received.push_back(n);
+    total = t;
+  };
+  // Small chunks: the transfer spans many frames.
+  ASSERT_TRUE(c->fetchMap(mirror, progress, 16).ok());
+  const auto first = backend_.mapSnapshot();
+  expectMirrorEquals(mirror, *first);
+  EXPECT_EQ(total, first->blockCount());
+  ASSERT_GT(received.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(received.begin(), received.end()));
+  EXPECT_EQ(received.back(), total);
+
+  // A new submap and a loop closure that moves submap 0: the next fetch carries only what changed.
+  backend_.addSubmap(5);
+  backend_.moveSubmap(0, geometry::poseFromXyzRpy(0.3, -0.2, 0.05, 0.0, 0.0, 0.08));
+  const auto second = backend_.mapSnapshot();
+  ASSERT_GT(second->version(), first->version());
+  received.clear();
+  ASSERT_TRUE(c->fetchMap(mirror, progress).ok());
+  expectMirrorEquals(mirror, *second);
+  EXPECT_LT(total, second->blockCount()) << "blocks sent";
+  EXPECT_GT(total, 0u);
+
+  // The copy exports to OctoMap exactly as the server's map does (vogctl snapshot --out map.ot).
+  EXPECT_EQ(mirror.knownVoxelCount(), second->knownVoxelCount());
+  const auto mine = mirror.toOcTree().value();
+  const auto theirs = second->toOcTree();
+  EXPECT_EQ(mine->getNumLeafNodes(), theirs->getNumLeafNodes());
+  for (auto it = theirs->begin_leafs(); it != theirs->end_leafs(); ++it) {
+    const octomap::OcTreeNode* node = mine->search(it.getKey());
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(node->getLogOdds(), it->getLogOdds());
+  }
+
+  // Up to date: an empty delta.
+  ASSERT_TRUE(c->fetchMap(mirror, progress).ok());
+  EXPECT_EQ(total, 0u);
+  expectMirrorEquals(mirror, *second);
+
+  // A version from the future (a restarted daemon) is refused, the mirror untouched.
+  v1::Envelope req;
+  req.mutable_get_map()->set_since_version(second->version() + 5);
+  const std::uint64_t id = c->send(req).value();
+  const v1::Envelope reply = c->receive(5s).value();
+  EXPECT_EQ(reply.request_id(), id);
+  ASSERT_TRUE(reply.has_error());
+  EXPECT_EQ(reply.error().code(), v1::ERROR_CODE_INVALID_ARGUMENT);
+}
+
+TEST_F(ApiServerTest, AuthenticationSucceedsOnlyWithTheSecretAndEachNonceOnce) {
+  start();
+  auto wrong = connect();
+  ASSERT_TRUE(wrong);
+  const auto refused = wrong->authenticate("not-the-operator-secret");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(wrong->lastServerError().code, v1::ERROR_CODE_AUTH_FAILED);
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "authentication failed"));
+  MissionCommand start_cmd;
+  start_cmd.kind = MissionCommand::Kind::kStart;
+  ASSERT_FALSE(wrong->command(start_cmd).ok());
+  EXPECT_EQ(wrong->lastServerError().code, v1::ERROR_CODE_UNAUTHENTICATED);
+
+  // A ChallengeResponse with no Hello before it.
+  v1::Envelope stray;
+  stray.mutable_challenge_response()->set_client_nonce(std::string(32, 'c'));
+  stray.mutable_challenge_response()->set_mac(std::string(32, 'm'));
+  (void)wrong->send(stray).value();
+  const v1::Envelope no_challenge = wrong->receive(5s).value();
+  ASSERT_TRUE(no_challenge.has_error());
+  EXPECT_EQ(no_challenge.error().code(), v1::ERROR_CODE_AUTH_FAILED);
+
+  // A correct answer replayed: the nonce was consumed by the first use.
+  auto right = connect();
+  ASSERT_TRUE(right);
+  v1::Envelope hello;
+  hello.mutable_hello()->set_protocol_version(1);
+  (void)right->send(hello).value();
+  const v1::Envelope challenge = right->receive(5s).value();
+  ASSERT_TRUE(challenge.has_hello_response());
+  const std::string server_nonce = challenge.hello_response().server_nonce();
+  ASSERT_EQ(server_nonce.size(), 32u);
+  const std::string client_nonce(32, '\x5a');
+  v1::Envelope answer;
+  answer.mutable_challenge_response()->set_client_nonce(client_nonce);
+  answer.mutable_challenge_response()->set_mac(std::string(asBytes(clientMac(kSecret, server_nonce, client_nonce))));
+  (void)right->send(answer).value();
+  const v1::Envelope ok = right->receive(5s).value();
+  ASSERT_TRUE(ok.has_auth_result());
+  EXPECT_EQ(ok.auth_result().role(), v1::ROLE_OPERATOR);
+  EXPECT_TRUE(macEquals(ok.auth_result().server_proof(), serverProof(kSecret, server_nonce, client_nonce)));
+  (void)right->send(answer).value();
+  const v1::Envelope replay = right->receive(5s).value();
+  ASSERT_TRUE(replay.has_error());
+  EXPECT_EQ(replay.error().code(), v1::ERROR_CODE_AUTH_FAILED);
+  EXPECT_TRUE(right->command(start_cmd).ok() || right->lastServerError().code == v1::ERROR_CODE_REJECTED);
+  EXPECT_TRUE(logger_.contains(LogLevel::kInfo, "authenticated as operator"));
+}
+
+TEST_F(ApiServerTest, CommandWithoutAuthenticationIsRefusedAndLogged) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  MissionCommand abort_cmd;
+  abort_cmd.kind = MissionCommand::Kind::kAbort;
+  const auto r = c->command(abort_cmd);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_UNAUTHENTICATED);
+  EXPECT_NE(r.error().message.find("operator role"), std::string::npos) << r.error().message;
+  EXPECT_TRUE(backend_.commands().empty());
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "refused mission command KIND_ABORT"));
+  // The session stays usable for reads.
+  EXPECT_TRUE(c->status().ok());
+}
+
+struct Violation {
+  const char* name;
+  std::string bytes;
+  v1::ErrorCode code;
+};
+
+std::vector<Violation> violations() {
+  v1::Envelope response_as_request;
+  response_as_request.set_request_id(4);
+  response_as_request.mutable_status();
+  return {
+      {"malformed", std::string("\0\0\0\3\x0f\x01\x02", 7), v1::ERROR_CODE_MALFORMED_FRAME},
+      {"oversize", std::string("\x7f\xff\xff\xff", 4), v1::ERROR_CODE_FRAME_TOO_LARGE},
+      // request_id 7 and field 50 (a message type this server does not know) as a varint.
+      {"unknown type", std::string("\0\0\0\5\x08\x07\x90\x03\x01", 9), v1::ERROR_CODE_UNKNOWN_MESSAGE},
+      {"response as request", encodeFrame(response_as_request).value(), v1::ERROR_CODE_UNKNOWN_MESSAGE},
+  };
+}
+
+TEST_F(ApiServerTest, ProtocolViolationsGetAnErrorAndDisconnectOnlyThatClient) {
+  start();
+  auto good = connect();
+  ASSERT_TRUE(good);
+  ASSERT_TRUE(good->subscribe({true, false, false}).ok());
+  std::uint64_t n = 0;
+  for (const Violation& v : violations()) {
+    auto bad = connect();
+    ASSERT_TRUE(bad);
+    ASSERT_TRUE(bad->status().ok());
+    ASSERT_TRUE(bad->sendRaw(v.bytes).ok());
+    const auto err = bad->receive(5s);
+    ASSERT_TRUE(err.ok()) << v.name;
+    ASSERT_TRUE(err->has_error()) << v.name;
+    EXPECT_EQ(err->error().code(), v.code) << v.name << ": " << err->error().message();
+    EXPECT_TRUE(closedByServer(*bad)) << v.name;
+    ++n;
+    ASSERT_TRUE(eventually([&](const ApiServerStats& s) { return s.protocol_errors == n; })) << v.name;
+
+    // The other client keeps working: calls and streams.
+    EXPECT_TRUE(good->status().ok()) << v.name;
+    Waypoint w;
+    w.stamp_ns = static_cast<std::int64_t>(n);
+    server_->publishWaypoint(w);
+    const auto msg = good->nextStream(5s);
+    ASSERT_TRUE(msg.ok()) << v.name;
+    ASSERT_TRUE(std::holds_alternative<Waypoint>(*msg));
+    EXPECT_EQ(std::get<Waypoint>(*msg).stamp_ns, static_cast<std::int64_t>(n));
+  }
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "exceeds the maximum"));
+  EXPECT_EQ(server_->stats().clients, 1u);
+}
+
+TEST_F(ApiServerTest, ASlowReaderDoesNotHoldUpWaypointsForOthers) {
+  ApiServerConfig config = defaultConfig();
+  config.socket_send_buffer_bytes = 4096;
+  config.max_queued_waypoints = 16;
+  start(config);
+  client::ClientConfig slow_config;
+  slow_config.socket_receive_buffer_bytes = 4096;
+  auto slow = connect(slow_config);
+  auto fast = connect();
+  ASSERT_TRUE(slow && fast);
+  ASSERT_TRUE(slow->subscribe({true, false, false}).ok());
+  ASSERT_TRUE(fast->subscribe({true, false, false}).ok());
+
+  // The slow client reads nothing from here on. Each waypoint must reach the fast client at once,
+  // in order and with nothing dropped, long after the slow client's socket buffers are full.
+  constexpr int kN = 3000;
+  for (int i = 1; i <= kN; ++i) {
+    Waypoint w;
+    w.stamp_ns = i;
+    w.T_world_target = geometry::poseFromXyzRpy(0.001 * i, 2.0, -3.0, 0.0, 0.0, 0.25);
+    w.speed_mps = 0.25;
+    server_->publishWaypoint(w);
+    const auto msg = fast->nextStream(5s);
+    ASSERT_TRUE(msg.ok()) << i << ": " << msg.error().message;
+    const auto& got = std::get<Waypoint>(*msg);
+    ASSERT_EQ(got.seq, static_cast<std::uint64_t>(i));
+    ASSERT_EQ(got.stamp_ns, i);
+    ASSERT_EQ(got.dropped, 0u);
+    ASSERT_TRUE(got.T_world_target.isApprox(w.T_world_target, 1e-12));
+  }
+  ASSERT_GT(server_->stats().stream_drops, 0u);
+
+  // Now the slow client reads: every waypoint was either delivered or counted as dropped, the
+  // oldest went first, and the newest arrived.
+  std::uint64_t delivered = 0;
+  std::uint64_t last_seq = 0;
+  Waypoint last;
+  while (last_seq < kN) {
+    const auto msg = slow->nextStream(5s);
+    ASSERT_TRUE(msg.ok()) << msg.error().message;
+    last = std::get<Waypoint>(*msg);
+    ASSERT_GT(last.seq, last_seq);
+    last_seq = last.seq;
+    ++delivered;
+  }
+  EXPECT_GT(last.dropped, 0u);
+  EXPECT_EQ(delivered + last.dropped, static_cast<std::uint64_t>(kN));
+  EXPECT_EQ(server_->stats().waypoint_drops, last.dropped);
+  EXPECT_EQ(server_->stats().stream_drops, last.dropped);
+  EXPECT_EQ(server_->stats().slow_disconnects, 0u);
+}
+
+TEST_F(ApiServerTest, PoseAndStatusStreamsFollowSubscriptions) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  ASSERT_TRUE(c->subscribe({false, true, true}).ok());
+  Waypoint w;  // not subscribed: never arrives
+  server_->publishWaypoint(w);
+  PoseUpdate p;
+  p.stamp_ns = 42;
+  p.T_world_vehicle = geometry::poseFromXyzRpy(1.0, 2.0, -3.0, 0.1, -0.05, 2.5);
+  server_->publishPose(p);
+  const auto got_pose = c->nextStream(5s).value();
+  ASSERT_TRUE(std::holds_alternative<PoseUpdate>(got_pose));
+  EXPECT_EQ(std::get<PoseUpdate>(got_pose).stamp_ns, 42);
+  EXPECT_EQ(std::get<PoseUpdate>(got_pose).seq, 1u);
+  EXPECT_TRUE(std::get<PoseUpdate>(got_pose).T_world_vehicle.isApprox(p.T_world_vehicle, 1e-12));
+
+  server_->publishStatus(backend_.status());
+  const auto got_status = c->nextStream(5s).value();
+  ASSERT_TRUE(std::holds_alternative<StatusUpdate>(got_status));
+  EXPECT_EQ(std::get<StatusUpdate>(got_status).status.devices.size(), 2u);
+  EXPECT_EQ(std::get<StatusUpdate>(got_status).status.n_submaps, 3u);
+
+  ASSERT_TRUE(c->subscribe({false, false, false}).ok());
+  server_->publishPose(p);
+  EXPECT_FALSE(c->nextStream(200ms).ok());
+}
+
+TEST_F(ApiServerTest, ClientLimitRefusesTheExtraClientOnly) {
+  ApiServerConfig config = defaultConfig();
+  config.max_clients = 2;
+  start(config);
+  auto a = connect();
+  auto b = connect();
+  ASSERT_TRUE(a && b);
+  ASSERT_TRUE(a->status().ok() && b->status().ok());
+  auto extra = connect();
+  ASSERT_TRUE(extra);
+  const auto err = extra->receive(5s);
+  ASSERT_TRUE(err.ok());
+  ASSERT_TRUE(err->has_error());
+  EXPECT_EQ(err->error().code(), v1::ERROR_CODE_TOO_MANY_CLIENTS);
+  EXPECT_TRUE(closedByServer(*extra));
+  EXPECT_TRUE(a->status().ok() && b->status().ok());
+  EXPECT_EQ(server_->stats().refused_full, 1u);
+  // A slot frees when a client leaves.
+  b.reset();
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.clients == 1; }));
+  auto again = connect();
+  ASSERT_TRUE(again);
+  EXPECT_TRUE(again->status().ok());
+}
+
+// Sends `n` GetStatus requests in one write and returns the error codes of the replies (0 = status).
+std::vector<v1::ErrorCode> pipelined(ApiClient& c, int n) {
+  std::string bytes;
+  for (int i = 1; i <= n; ++i) {
+    v1::Envelope e;
+    e.set_request_id(static_cast<std::uint64_t>(1000 + i));
+    e.mutable_get_status();
+    bytes += encodeFrame(e).value();
+  }
+  EXPECT_TRUE(c.sendRaw(bytes).ok());
+  std::vector<v1::ErrorCode> codes;
+  for (int i = 1; i <= n; ++i) {
+    auto r = c.receive(5s);
+    if (!r.ok()) break;
+    EXPECT_EQ(r->request_id(), static_cast<std::uint64_t>(1000 + i));
+    codes.push_back(r->has_error() ? r->error().code() : v1::ERROR_CODE_UNSPECIFIED);
+  }
+  return codes;
+}
+
+TEST_F(ApiServerTest, RateAndInFlightLimitsRefuseRequestsWithAnError) {
+  ApiServerConfig config = defaultConfig();
+  config.max_requests_per_s = 0.5;
+  config.request_burst = 5;
+  start(config);
+  auto c = connect();
+  ASSERT_TRUE(c);
+  const auto codes = pipelined(*c, 12);
+  ASSERT_EQ(codes.size(), 12u);
+  EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_UNSPECIFIED), 5);
+  EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_RATE_LIMITED), 7);
+}
+
+TEST_F(ApiServerTest, InFlightLimitAndUnreadResponsesDisconnectOnlyTheFlooder) {
+  ApiServerConfig config = defaultConfig();
+  config.max_in_flight = 3;
+  config.max_queued_responses = 8;
+  start(config);
+  auto polite = connect();
+  auto flooder = connect();
+  ASSERT_TRUE(polite && flooder);
+  // Six requests in one segment: three answered, three refused as in flight.
+  const auto codes = pipelined(*flooder, 6);
+  ASSERT_EQ(codes.size(), 6u);
+  EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_UNSPECIFIED), 3);
+  EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_TOO_MANY_IN_FLIGHT), 3);
+  // Forty in one write, never read: more than eight responses pile up and the flooder is dropped.
+  std::string bytes;
+  for (int i = 1; i <= 40; ++i) {
+    v1::Envelope e;
+    e.set_request_id(static_cast<std::uint64_t>(i));
+    e.mutable_get_status();
+    bytes += encodeFrame(e).value();
+  }
+  ASSERT_TRUE(flooder->sendRaw(bytes).ok());
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.slow_disconnects == 1; }));
+  EXPECT_TRUE(closedByServer(*flooder));
+  EXPECT_TRUE(polite->status().ok());
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "cannot keep up"));
+}
+
+TEST(ApiServerConfigTest, ValidateNamesTheKeyAndValue) {
+  ApiServerConfig c;
+  EXPECT_TRUE(c.validate().ok());
+  c.dispatch.operator_secret = "short";
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("api.operator_secret"), std::string::npos);
+  c = {};
+  c.max_clients = 0;
+  EXPECT_NE(c.validate().error().message.find("api.max_clients: 0"), std::string::npos);
+  c = {};
+  c.dispatch.max_frame_bytes = 100;
+  EXPECT_NE(c.validate().error().message.find("api.max_frame_bytes: 100"), std::string::npos);
+  c = {};
+  c.dispatch.map_blocks_per_chunk = 100000;
+  EXPECT_NE(c.validate().error().message.find("api.map_blocks_per_chunk: 100000"), std::string::npos);
+  c = {};
+  c.max_requests_per_s = -1.0;
+  EXPECT_NE(c.validate().error().message.find("api.max_requests_per_s"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vog::api
+
+namespace vog::api {
+namespace {
+
+// Runs vogctl with `args`, returns its exit code and stdout.
+std::pair<int, std::string> vogctl(const std::string& args) {
+  const std::string command = std::string(VOG_VOGCTL_PATH) + " " + args + " 2>/dev/null";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return {-1, ""};
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+TEST_F(ApiServerTest, VogctlStatusWatchAndSnapshot) {
+  start();
+  const std::string port = " --port " + std::to_string(port_);
+  const auto [status_rc, status_out] = vogctl("status --json" + port);
+  ASSERT_EQ(status_rc, 0);
+  EXPECT_NE(status_out.find("\"mission_state\":\"idle\""), std::string::npos) << status_out;
+  EXPECT_NE(status_out.find("\"n_submaps\":3"), std::string::npos) << status_out;
+  EXPECT_NE(status_out.find("\"device\":\"sonar\",\"state\":\"degraded\""), std::string::npos) << status_out;
+
+  // Wrong secret: authentication fails, non-zero exit.
+  const vog::test::TempDir dir("vogctl");
+  {
+    std::FILE* f = std::fopen((dir.path() / "wrong").c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("not-the-secret-at-all\n", f);
+    std::fclose(f);
+  }
+  EXPECT_NE(vogctl("status --secret-file " + (dir.path() / "wrong").string() + port).first, 0);
+
+  const auto bt = dir.path() / "map.bt";
+  const auto [snap_rc, snap_out] = vogctl("snapshot --json --out " + bt.string() + port);
+  ASSERT_EQ(snap_rc, 0) << snap_out;
+  const auto snapshot = backend_.mapSnapshot();
+  EXPECT_NE(snap_out.find("\"known_voxels\":" + std::to_string(snapshot->knownVoxelCount())), std::string::npos)
+      << snap_out;
+  octomap::OcTree read(0.1);
+  ASSERT_TRUE(read.readBinary(bt.string()));
+  EXPECT_EQ(read.getResolution(), snapshot->resolution());
+  const auto theirs = snapshot->toOcTree();
+  // .bt keeps occupancy only: every voxel's occupied/free state must match the server's map.
+  std::size_t checked = 0;
+  for (auto it = theirs->begin_leafs(); it != theirs->end_leafs(); ++it, ++checked) {
+    const octomap::OcTreeNode* node = read.search(it.getKey());
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(read.isNodeOccupied(node), theirs->isNodeOccupied(*it));
+  }
+  EXPECT_GT(checked, 1000u);
+  EXPECT_NE(vogctl("snapshot --out " + (dir.path() / "map.png").string() + port).first, 0);
+
+  // watch: two waypoints published while it runs.
+  std::thread publisher([this] {
+    bool seen = false;  // stop once vogctl has come and gone
+    for (int i = 1; i <= 100; ++i) {
+      std::this_thread::sleep_for(50ms);
+      Waypoint w;
+      w.stamp_ns = i * 1'000'000'000LL;
+      w.T_world_target = geometry::poseFromXyzRpy(i, 0.0, -1.0, 0.0, 0.0, 0.0);
+      server_->publishWaypoint(w);
+      const bool connected = server_->stats().clients > 0;
+      if (seen && !connected) break;
+      seen = seen || connected;
+    }
+  });
+  const auto [watch_rc, watch_out] = vogctl("watch --waypoints --count 2 --json" + port);
+  publisher.join();
+  EXPECT_EQ(watch_rc, 0);
+  EXPECT_EQ(std::count(watch_out.begin(), watch_out.end(), '\n'), 2) << watch_out;
+  EXPECT_NE(watch_out.find("\"stream\":\"waypoint\""), std::string::npos) << watch_out;
+}
+
+}  // namespace
+}  // namespace vog::api
