@@ -41,6 +41,101 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPi
                                                               std::move(map.value())));
 }
 
+Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingPipelineConfig& config,
+                                                                 const PipelineState& state) {
+  if (Status s = config.validate(); !s.ok()) return s.error();
+  if (state.estimates.size() != state.submaps.size()) {
+    return Error{"restore: " + std::to_string(state.submaps.size()) + " submaps but " +
+                 std::to_string(state.estimates.size()) + " estimates"};
+  }
+  for (std::size_t k = 0; k < state.submaps.size(); ++k) {
+    const ClosedSubmap& c = state.submaps[k];
+    const std::string name = "restore: submap " + std::to_string(c.index);
+    if (c.index != static_cast<std::int64_t>(k)) {
+      return Error{"restore: submap at position " + std::to_string(k) + " has index " + std::to_string(c.index)};
+    }
+    if (!c.grid || !c.grid->finalized()) return Error{name + " has no finalized grid"};
+    if (c.has_previous != (k > 0)) {
+      return Error{name + (k > 0 ? " lacks its odometry factor" : " (the first) has an odometry factor")};
+    }
+    if (!state.estimates[k].allFinite()) return Error{name + ": estimate is not finite"};
+  }
+  std::size_t closure_end = 0;  // closures are grouped by `to`, in submap order (as process() adds them)
+  for (const LoopClosure& lc : state.closures) {
+    const auto n = static_cast<std::int64_t>(state.submaps.size());
+    if (lc.to < 0 || lc.to >= n || lc.from < 0 || lc.from >= n || lc.from == lc.to) {
+      return Error{"restore: loop closure " + std::to_string(lc.from) + " -> " + std::to_string(lc.to) +
+                   " names an unknown submap (have " + std::to_string(n) + ")"};
+    }
+    if (static_cast<std::size_t>(lc.to) < closure_end) {
+      return Error{"restore: loop closure " + std::to_string(lc.from) + " -> " + std::to_string(lc.to) +
+                   " is out of order (closures must be sorted by their newer submap)"};
+    }
+    closure_end = static_cast<std::size_t>(lc.to);
+  }
+
+  auto pipeline = create(config);
+  if (!pipeline) return pipeline.error();
+  MappingPipeline& p = *pipeline.value();
+  if (!state.submaps.empty()) {
+    auto builder = SubmapBuilder::resumeAfter(config.builder, state.submaps.back());
+    if (!builder) return Error{"restore: " + builder.error().message};
+    p.builder_ = std::move(builder.value());
+  }
+
+  // Nodes and factors in the order process() added them: per submap the node, its odometry factor,
+  // its absolute factor, then the closures accepted for it.
+  const double var_z = config.depth_stddev_m * config.depth_stddev_m;
+  const double var_rp = config.roll_pitch_stddev_rad * config.roll_pitch_stddev_rad;
+  const Eigen::Matrix3d absolute_information = Eigen::Vector3d(1.0 / var_z, 1.0 / var_rp, 1.0 / var_rp).asDiagonal();
+  std::size_t next_closure = 0;
+  std::vector<geometry::Pose3> poses;
+  for (std::size_t k = 0; k < state.submaps.size(); ++k) {
+    const ClosedSubmap& c = state.submaps[k];
+    const NodeId id = c.index;
+    if (Status s = p.graph_.addNode(id, fromXyzRpy(state.estimates[k])); !s.ok()) return Error{"restore: " + s.error().message};
+    if (Status s = p.graph_.setEstimate(id, state.estimates[k]); !s.ok()) return Error{"restore: " + s.error().message};
+    if (c.has_previous) {
+      auto information = informationFromCovariance(c.odometry_covariance, "odometry covariance");
+      if (!information) return Error{"restore: submap " + std::to_string(id) + ": " + information.error().message};
+      if (Status s = p.graph_.addOdometryFactor(id - 1, id, c.odometry_from_previous, Eigen::Matrix3d(information.value()));
+          !s.ok()) {
+        return Error{"restore: " + s.error().message};
+      }
+    }
+    if (Status s = p.graph_.addAbsoluteFactor(id, c.base_z_roll_pitch, absolute_information); !s.ok()) {
+      return Error{"restore: " + s.error().message};
+    }
+    for (; next_closure < state.closures.size() && state.closures[next_closure].to == id; ++next_closure) {
+      const LoopClosure& lc = state.closures[next_closure];
+      if (Status s = p.graph_.addPartialLoopClosure(lc.from, lc.to, lc.factor); !s.ok()) {
+        return Error{"restore: " + s.error().message};
+      }
+    }
+    auto pose = p.graph_.pose(id);
+    if (!pose) return Error{"restore: " + pose.error().message};
+    SubmapRecord record;
+    record.index = id;
+    record.T_world_base_odom = c.T_world_base_odom;
+    record.T_world_base = pose.value();
+    record.first_stamp_ns = c.first_stamp_ns;
+    record.last_stamp_ns = c.last_stamp_ns;
+    record.n_scans = c.n_scans;
+    record.reason = c.reason;
+    p.submaps_.push_back(record);
+    poses.push_back(pose.value());
+    if (Status s = p.map_->addSubmap(static_cast<map::SubmapId>(id), c.grid, pose.value()); !s.ok()) {
+      return Error{"restore: " + s.error().message};
+    }
+  }
+  // deform() computes the cached inverses exactly as the running pipeline's last deformation did.
+  if (!poses.empty()) {
+    if (Status s = p.map_->deform(poses); !s.ok()) return Error{"restore: deform: " + s.error().message};
+  }
+  p.closures_ = state.closures;
+  return pipeline;
+}
+
 Result<MappingUpdate> MappingPipeline::feed(const ScanInput& input) {
   if (failed_) return Error{"mapping pipeline stopped: " + failed_->message};
   auto closed = builder_.addScan(input);
@@ -161,6 +256,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   for (const LoopClosure& c : update.closures) closures_.push_back(c);
   stats_.add(update.loop_stats);
   update.closed_submap = id;
+  update.closed = std::move(closed);
   return update;
 }
 

@@ -324,6 +324,22 @@ Result<geometry::Pose3> PoseGraph::pose(NodeId id) const {
   return fromXyzRpy(it->second);
 }
 
+Result<Vector6d> PoseGraph::estimate(NodeId id) const {
+  const auto it = nodes_.find(id);
+  if (it == nodes_.end()) return Error{"pose graph: no node " + std::to_string(id)};
+  return it->second;
+}
+
+Status PoseGraph::setEstimate(NodeId id, const Vector6d& x_world_node) {
+  const auto it = nodes_.find(id);
+  if (it == nodes_.end()) return Error{"pose graph: no node " + std::to_string(id)};
+  if (!x_world_node.allFinite()) {
+    return Error{"pose graph: estimate of node " + std::to_string(id) + " is not finite"};
+  }
+  it->second = x_world_node;
+  return Status::success();
+}
+
 std::vector<NodeId> PoseGraph::nodeIds() const {
   std::vector<NodeId> ids;
   ids.reserve(nodes_.size());

@@ -98,6 +98,31 @@ std::optional<CloseReason> SubmapBuilder::closeReason(const ScanInput& input) co
   return std::nullopt;
 }
 
+Result<SubmapBuilder> SubmapBuilder::resumeAfter(const SubmapBuilderConfig& config, const ClosedSubmap& last_closed) {
+  auto builder = create(config);
+  if (!builder) return builder.error();
+  if (last_closed.index < 0) {
+    return Error{"submap builder: cannot resume after submap index " + std::to_string(last_closed.index)};
+  }
+  if (!geometry::isValidPose(last_closed.T_world_base_odom)) {
+    return Error{"submap builder: cannot resume after submap " + std::to_string(last_closed.index) +
+                 ": its base pose is non-finite or non-rigid"};
+  }
+  if (last_closed.last_stamp_ns < last_closed.first_stamp_ns) {
+    return Error{"submap builder: cannot resume after submap " + std::to_string(last_closed.index) +
+                 ": last stamp " + std::to_string(last_closed.last_stamp_ns) + " is before first stamp " +
+                 std::to_string(last_closed.first_stamp_ns)};
+  }
+  SubmapBuilder& b = builder.value();
+  b.has_stamp_ = true;
+  b.last_stamp_ns_ = last_closed.last_stamp_ns;
+  b.next_index_ = last_closed.index + 1;
+  b.has_previous_base_ = true;
+  b.T_world_previous_base_ = last_closed.T_world_base_odom;
+  b.previous_first_stamp_ns_ = last_closed.first_stamp_ns;
+  return builder;
+}
+
 Result<ClosedSubmap> SubmapBuilder::closeActive(CloseReason reason) {
   ClosedSubmap out;
   out.index = next_index_;

@@ -11,7 +11,8 @@
 //   5. deforms the VogMap with every optimised base pose (Alg. 1) and reports which submaps moved, so
 //      that the caller can run MergedMap::sync on `map().entries()`.
 //
-// Lifecycle: create(); feed() any number of times in time order; finish() closes the last submap.
+// Lifecycle: create() (or restore() from persisted state); feed() any number of times in time order;
+// finish() closes the last submap.
 // Invariants: the graph has exactly one node per VogMap submap, with the same id (the submap index)
 // and, after every feed()/finish() that returned ok, the same pose; a rejected input changes nothing.
 // An internal failure while processing a closed submap (pose graph or optimiser error, never caused by
@@ -55,6 +56,9 @@ struct MappingUpdate {
   bool optimized = false;
   OptimizeResult optimize;                    // valid when optimized
   std::vector<map::SubmapId> moved;           // submaps whose base pose changed in the VogMap
+  // The new submap as the builder closed it (grid, odometry factor, absolute measurement): what a
+  // mission store persists so that restore() can rebuild the graph. Set iff closed_submap is.
+  std::optional<ClosedSubmap> closed;
 };
 
 // The record of one submap: odometry and current (optimised) base pose.
@@ -68,9 +72,28 @@ struct SubmapRecord {
   CloseReason reason = CloseReason::kFlush;
 };
 
+// Everything restore() needs: the closed submaps in index order 0..N-1 (grids finalized, as the builder
+// produced them or reloaded from disk), the accepted closures in acceptance order, and the current graph
+// estimate of every submap (x, y, z, roll, pitch, yaw as PoseGraph::estimate() returns it), in index order.
+struct PipelineState {
+  std::vector<ClosedSubmap> submaps;
+  std::vector<LoopClosure> closures;
+  std::vector<Vector6d> estimates;
+};
+
 class MappingPipeline {
  public:
   static Result<std::unique_ptr<MappingPipeline>> create(const MappingPipelineConfig& config);
+  // Rebuilds a pipeline from persisted state (a resumed mission). The graph gets the same nodes and
+  // factors, added in the same order as the original pipeline added them, and the same estimates; the
+  // VogMap the same entries at the same poses; so feeding the scans that follow gives bit-identical
+  // results to a pipeline that never stopped. The submap that was active when the state was saved is
+  // not part of it: the next fed scan starts submap N (its odometry factor runs from submap N-1, see
+  // SubmapBuilder::resumeAfter). Loop statistics restart at zero. An inconsistent state (gaps in the
+  // indices, a closure naming an unknown or newer submap, a missing or non-finite estimate, an
+  // unfinalized grid) is an error naming what was wrong.
+  static Result<std::unique_ptr<MappingPipeline>> restore(const MappingPipelineConfig& config,
+                                                          const PipelineState& state);
   MappingPipeline(const MappingPipeline&) = delete;
   MappingPipeline& operator=(const MappingPipeline&) = delete;
 

@@ -97,6 +97,12 @@ class PoseGraph {
 
   bool hasNode(NodeId id) const { return nodes_.count(id) != 0; }
   Result<geometry::Pose3> pose(NodeId id) const;
+  // The estimate as the graph stores it, (x, y, z, roll, pitch, yaw). Persistence keeps these rather
+  // than pose(): a Pose3 -> xyzrpy round trip is not bit-exact, and a restored graph must warm-start
+  // the next optimisation from exactly the same values.
+  Result<Vector6d> estimate(NodeId id) const;
+  // Overwrites the estimate of an existing node (restoring persisted estimates); must be finite.
+  Status setEstimate(NodeId id, const Vector6d& x_world_node);
   std::vector<NodeId> nodeIds() const;
   std::size_t numNodes() const { return nodes_.size(); }
   std::size_t numFactors() const { return relative_.size() + absolute_.size(); }

@@ -76,6 +76,11 @@ struct ClosedSubmap {
 class SubmapBuilder {
  public:
   static Result<SubmapBuilder> create(const SubmapBuilderConfig& config);
+  // A builder in the state right after `last_closed` was closed, but with no active submap (a resumed
+  // mission: the scans of the submap that was active at a crash are gone). The next scan starts
+  // submap last_closed.index + 1, its odometry factor runs from last_closed's base pose, and its stamp
+  // must be after last_closed.last_stamp_ns.
+  static Result<SubmapBuilder> resumeAfter(const SubmapBuilderConfig& config, const ClosedSubmap& last_closed);
 
   // Adds one scan. Returns the submap this scan closed (the scan then starts the next one), or nullopt.
   Result<std::optional<ClosedSubmap>> addScan(const ScanInput& input);

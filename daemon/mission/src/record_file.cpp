@@ -1,0 +1,178 @@
+#include "vog/mission/record_file.hpp"
+
+#include "vog/mission/crc32c.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace vog::mission {
+namespace {
+
+std::uint32_t readU32(std::span<const std::uint8_t> b, std::size_t at) {
+  return static_cast<std::uint32_t>(b[at]) | static_cast<std::uint32_t>(b[at + 1]) << 8 |
+         static_cast<std::uint32_t>(b[at + 2]) << 16 | static_cast<std::uint32_t>(b[at + 3]) << 24;
+}
+
+// Payload length of a valid frame at `at`, or nullopt.
+std::optional<std::uint32_t> validFrame(std::span<const std::uint8_t> b, std::size_t at) {
+  if (b.size() - at < kFrameHeaderBytes) return std::nullopt;
+  const std::uint32_t len = readU32(b, at);
+  if (len == 0 || len > kMaxRecordPayloadBytes) return std::nullopt;
+  if (b.size() - at - kFrameHeaderBytes < len) return std::nullopt;
+  if (crc32c(b.subspan(at + kFrameHeaderBytes, len)) != readU32(b, at + 4)) return std::nullopt;
+  return len;
+}
+
+std::string errnoText() { return std::strerror(errno); }
+
+Result<std::vector<std::uint8_t>> readAll(int fd, const std::filesystem::path& path) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) return Error{"cannot stat " + path.string() + ": " + errnoText()};
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(st.st_size));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::pread(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return Error{"cannot read " + path.string() + ": " + errnoText()};
+    if (n == 0) break;  // shrank meanwhile
+    done += static_cast<std::size_t>(n);
+  }
+  bytes.resize(done);
+  return bytes;
+}
+
+}  // namespace
+
+Result<RecordScan> scanRecords(std::span<const std::uint8_t> bytes, const std::string& what) {
+  RecordScan scan;
+  std::size_t pos = 0;
+  while (pos < bytes.size()) {
+    if (auto len = validFrame(bytes, pos)) {
+      FramedRecord r;
+      r.offset = pos;
+      const auto payload = bytes.subspan(pos + kFrameHeaderBytes, *len);
+      r.payload.assign(payload.begin(), payload.end());
+      scan.records.push_back(std::move(r));
+      pos += kFrameHeaderBytes + *len;
+      continue;
+    }
+    for (std::size_t p = pos + 1; p + kFrameHeaderBytes < bytes.size(); ++p) {
+      if (validFrame(bytes, p)) {
+        return Error{what + ": corrupt record at byte offset " + std::to_string(pos) +
+                     " (not a torn tail: a valid record follows at byte offset " + std::to_string(p) + ")"};
+      }
+    }
+    scan.tail.torn = true;
+    scan.tail.offset = pos;
+    scan.tail.discarded_bytes = bytes.size() - pos;
+    break;
+  }
+  scan.good_end = pos;
+  return scan;
+}
+
+Result<RecordScan> readRecordFile(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Error{"cannot open " + path.string() + ": " + errnoText()};
+  auto bytes = readAll(fd, path);
+  ::close(fd);
+  if (!bytes) return bytes.error();
+  return scanRecords(bytes.value(), path.string());
+}
+
+std::vector<std::uint8_t> encodeFrame(std::span<const std::uint8_t> payload) {
+  std::vector<std::uint8_t> out;
+  out.reserve(kFrameHeaderBytes + payload.size());
+  const auto len = static_cast<std::uint32_t>(payload.size());
+  const std::uint32_t crc = crc32c(payload);
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(len >> (8 * i)));
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(crc >> (8 * i)));
+  out.insert(out.end(), payload.begin(), payload.end());
+  return out;
+}
+
+Status syncDirectory(const std::filesystem::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return Error{"cannot open directory " + dir.string() + ": " + errnoText()};
+  const int rc = ::fsync(fd);
+  const std::string err = rc != 0 ? errnoText() : std::string();
+  ::close(fd);
+  if (rc != 0) return Error{"cannot fsync directory " + dir.string() + ": " + err};
+  return Status::success();
+}
+
+Result<std::unique_ptr<RecordWriter>> RecordWriter::open(const std::filesystem::path& path, RecordScan* existing) {
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(path, ec);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) return Error{"cannot open " + path.string() + " for appending: " + errnoText()};
+  auto close_with = [fd](Error e) -> Error {
+    ::close(fd);
+    return e;
+  };
+  auto bytes = readAll(fd, path);
+  if (!bytes) return close_with(bytes.error());
+  auto scan = scanRecords(bytes.value(), path.string());
+  if (!scan) return close_with(scan.error());
+  if (scan->tail.torn) {
+    if (::ftruncate(fd, static_cast<off_t>(scan->good_end)) != 0 || ::fsync(fd) != 0) {
+      return close_with(Error{"cannot truncate the torn tail of " + path.string() + " at byte offset " +
+                              std::to_string(scan->good_end) + ": " + errnoText()});
+    }
+  }
+  if (!existed) {
+    const std::filesystem::path parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+    if (Status s = syncDirectory(parent); !s.ok()) return close_with(s.error());
+  }
+  std::FILE* file = ::fdopen(fd, "a");
+  if (file == nullptr) return close_with(Error{"cannot fdopen " + path.string() + ": " + errnoText()});
+  auto writer = std::unique_ptr<RecordWriter>(new RecordWriter(path, file, scan->good_end));
+  std::setvbuf(file, writer->stdio_buffer_.data(), _IOFBF, writer->stdio_buffer_.size());
+  if (existing != nullptr) *existing = std::move(scan.value());
+  return writer;
+}
+
+RecordWriter::~RecordWriter() { std::fclose(file_); }
+
+Status RecordWriter::fail(const std::string& what) {
+  failed_ = Error{what + " " + path_.string() + ": " + errnoText()};
+  return *failed_;
+}
+
+Status RecordWriter::append(std::span<const std::uint8_t> payload) {
+  if (failed_) return Error{"record file unusable after an earlier error: " + failed_->message};
+  if (payload.empty() || payload.size() > kMaxRecordPayloadBytes) {
+    return Error{"record payload of " + std::to_string(payload.size()) + " bytes is outside 1.." +
+                 std::to_string(kMaxRecordPayloadBytes)};
+  }
+  const std::vector<std::uint8_t> frame = encodeFrame(payload);
+  if (std::fwrite(frame.data(), 1, frame.size(), file_) != frame.size()) return fail("cannot write");
+  size_bytes_ += frame.size();
+  return Status::success();
+}
+
+Status RecordWriter::sync() {
+  if (failed_) return Error{"record file unusable after an earlier error: " + failed_->message};
+  if (std::fflush(file_) != 0) return fail("cannot flush");
+  if (::fsync(::fileno(file_)) != 0) return fail("cannot fsync");
+  return Status::success();
+}
+
+Status RecordWriter::truncate(std::uint64_t size_bytes) {
+  if (failed_) return Error{"record file unusable after an earlier error: " + failed_->message};
+  if (size_bytes > size_bytes_) {
+    return Error{"cannot truncate " + path_.string() + " to " + std::to_string(size_bytes) + " bytes: it holds " +
+                 std::to_string(size_bytes_)};
+  }
+  if (std::fflush(file_) != 0) return fail("cannot flush");
+  if (::ftruncate(::fileno(file_), static_cast<off_t>(size_bytes)) != 0) return fail("cannot truncate");
+  if (::fsync(::fileno(file_)) != 0) return fail("cannot fsync");
+  size_bytes_ = size_bytes;
+  return Status::success();
+}
+
+}  // namespace vog::mission
