@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 namespace vog::plan {
@@ -53,6 +54,7 @@ double NbvPlanner::edgeCost(const Waypoint& a, const Waypoint& b) const {
 }
 
 bool NbvPlanner::headingOk(const Waypoint& from, const Waypoint& to) const {
+  if (!config_.constrained_sampling) return true;
   return std::abs(geometry::wrapAngle(to.yaw_rad - from.yaw_rad)) <= config_.max_heading_change_rad + 1e-12;
 }
 
@@ -69,7 +71,7 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
     if (grid_->update(map).ok()) return {};
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
-  auto built = TraversabilityGrid::build(map, box, config_.collision_box_m);
+  auto built = TraversabilityGrid::build(map, box, config_.collision_box_m, {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
   return {};
@@ -82,7 +84,7 @@ void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& 
   n.parent = parent;
   n.seeded = seeded;
   n.cost_m = p.cost_m + edgeCost(p.w, w);
-  n.gain = gain_->segmentGain(map, p.w, w, &*grid_);
+  n.gain = config_.gain_along_edge ? gain_->segmentGain(map, p.w, w, &*grid_) : gain_->segmentGain(map, w, w, &*grid_);
   // Bircher 2016 Eq. 1: gain discounted by the cost of the path from the root.
   n.value = p.value + n.gain * std::exp(-config_.lambda * n.cost_m);
   tree_.push_back(n);
@@ -102,16 +104,24 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   PlanResult result;
   result.map_version = map.version();
   tree_.clear();
-  tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
   std::vector<Waypoint> seed;
   seed.swap(seed_branch_);
+  // The vehicle stops within its navigation and control error of the safe waypoint it was sent to,
+  // possibly just outside the safe voxels: the tree grows from the nearest safe position within
+  // root_tolerance_m.
+  Waypoint start = current;
   if (!grid_->isSafe(current.p_world)) {
-    result.status = PlanStatus::kNoPath;
-    result.tree_size = 1;
-    result.reason = "the collision box at the current position " + describe(current.p_world) +
-                    " is not entirely in known free space";
-    return result;
+    const auto snapped = grid_->nearestSafe(current.p_world, config_.root_tolerance_m);
+    if (!snapped) {
+      result.status = PlanStatus::kNoPath;
+      result.tree_size = 1;
+      result.reason = "the collision box at the current position " + describe(current.p_world) +
+                      " is not entirely in known free space (nor within plan.root_tolerance_m)";
+      return result;
+    }
+    start.p_world = *snapped;
   }
+  tree_.push_back(TreeNode{start, -1, 0.0, 0.0, 0.0, false});
 
   // Seed: the rest of the last best branch, as long as its edges are still free (Bircher 2016).
   int parent = 0;
@@ -122,12 +132,13 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     parent = static_cast<int>(tree_.size()) - 1;
   }
 
-  const Eigen::Vector3d root = current.p_world;
+  const Eigen::Vector3d root = start.p_world;
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   std::uniform_real_distribution<double> ux(config_.box_min_world_m.x(), config_.box_max_world_m.x());
   std::uniform_real_distribution<double> uy(config_.box_min_world_m.y(), config_.box_max_world_m.y());
   std::uniform_real_distribution<double> uz(config_.box_min_world_m.z(), config_.box_max_world_m.z());
   std::uniform_real_distribution<double> uyaw(-config_.max_heading_change_rad, config_.max_heading_change_rad);
+  std::uniform_real_distribution<double> uyaw_any(-std::numbers::pi, std::numbers::pi);
   auto bestValue = [&] {
     double v = 0.0;
     for (std::size_t i = 1; i < tree_.size(); ++i) v = std::max(v, tree_[i].value);
@@ -142,17 +153,21 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     ++samples;
     // Thesis 4.5.3: x-y at the current depth, or z at the current x-y. Every draw happens whether or
     // not the sample is kept, so the sequence depends only on the seed and the number of samples.
+    // Unconstrained (Bircher 2016): anywhere in the box, any heading.
+    const bool constrained = config_.constrained_sampling;
     const bool horizontal = u01(rng_) < config_.xy_sample_share;
     const double sx = ux(rng_);
     const double sy = uy(rng_);
     const double sz = uz(rng_);
-    const double dyaw = uyaw(rng_);
-    const Eigen::Vector3d target = horizontal ? Eigen::Vector3d(sx, sy, root.z()) : Eigen::Vector3d(root.x(), root.y(), sz);
+    const double dyaw = constrained ? uyaw(rng_) : uyaw_any(rng_);
+    const Eigen::Vector3d target = !constrained ? Eigen::Vector3d(sx, sy, sz)
+                                   : horizontal ? Eigen::Vector3d(sx, sy, root.z())
+                                                : Eigen::Vector3d(root.x(), root.y(), sz);
     int nearest = -1;
     double nearest_d = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < tree_.size(); ++i) {
       const Eigen::Vector3d& p = tree_[i].w.p_world;
-      const bool eligible = horizontal ? p.z() == root.z() : (p.x() == root.x() && p.y() == root.y());
+      const bool eligible = !constrained || (horizontal ? p.z() == root.z() : (p.x() == root.x() && p.y() == root.y()));
       if (!eligible) continue;
       const double d = (target - p).norm();
       if (d < nearest_d) {
@@ -167,8 +182,8 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     if (nearest_d > config_.max_edge_m) {
       end = near.w.p_world + (target - near.w.p_world) * (config_.max_edge_m / nearest_d);
       // Keep the constrained coordinates exact (no rounding drift off the plane or the vertical).
-      if (horizontal) end.z() = root.z();
-      else end.head<2>() = root.head<2>();
+      if (constrained && horizontal) end.z() = root.z();
+      else if (constrained) end.head<2>() = root.head<2>();
     }
     if (!grid_->edgeIsFree(near.w.p_world, end)) continue;
     const Waypoint w{end, geometry::wrapAngle(near.w.yaw_rad + dyaw)};
@@ -193,7 +208,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     s << "best branch value " << result.best_value << " <= plan.gain_threshold " << config_.gain_threshold << " after "
       << result.tree_size << " nodes";
     result.reason = s.str();
-    return goHome(current, std::move(result));
+    return goHome(start, std::move(result));
   }
   // Indices from the best node back to the root (at least two: best >= 1).
   std::vector<std::size_t> chain;

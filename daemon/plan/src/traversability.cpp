@@ -64,7 +64,8 @@ void windowOr(int lo, int hi, int r, Get&& get, Put&& put) {
 }  // namespace
 
 Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const Eigen::AlignedBox3d& box_world,
-                                                     const Eigen::Vector3d& collision_box_m) {
+                                                     const Eigen::Vector3d& collision_box_m,
+                                                     const AssumedFree& assumed_free) {
   if (!box_world.min().allFinite() || !box_world.max().allFinite() ||
       (box_world.max().array() <= box_world.min().array()).any())
     return Error{"traversability: the exploration box is empty or not finite"};
@@ -91,8 +92,25 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
       << " m (limit " << kMaxGridVoxels << ")";
     return Error{s.str()};
   }
+  if (!(assumed_free.radius_m >= 0.0) || !std::isfinite(assumed_free.radius_m) || !assumed_free.centre_world.allFinite())
+    return Error{"traversability: the assumed-free sphere must have a finite centre and radius >= 0"};
+  g.assumed_free_ = assumed_free;
   g.status_.assign(static_cast<std::size_t>(n), static_cast<std::uint8_t>(map::Occupancy::kUnknown));
   g.safe_.assign(static_cast<std::size_t>(n), 0);
+  if (assumed_free.radius_m > 0.0) {
+    // Voxels of blocks the map does not hold stay at this; readBlock applies the same rule.
+    const Eigen::Vector3d r = Eigen::Vector3d::Constant(assumed_free.radius_m);
+    KeyBox sphere;
+    sphere.min = map::pointToKey(assumed_free.centre_world - r, g.inv_resolution_);
+    sphere.max = map::pointToKey(assumed_free.centre_world + r, g.inv_resolution_);
+    sphere = intersect(sphere, g.grid_);
+    VoxelKey k;
+    if (!sphere.empty())
+      for (k.z() = sphere.min.z(); k.z() <= sphere.max.z(); ++k.z())
+        for (k.y() = sphere.min.y(); k.y() <= sphere.max.y(); ++k.y())
+          for (k.x() = sphere.min.x(); k.x() <= sphere.max.x(); ++k.x())
+            if (g.assumedFree(k)) g.status_[g.indexOf(k)] = kFree;
+  }
   for (const auto& [origin, block] : map.blocksChangedSince(0)) g.readBlock(origin, block.get());
   g.recompute(g.grid_);
   g.map_version_ = map.version();
@@ -117,6 +135,7 @@ void TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
           // The classification MergedMap::at makes: clamp, then threshold (thesis Eq. 3.4-3.5).
           if (block->count(i) != 0) status = bounds_.classify(bounds_.clamp(block->sum(i)));
         }
+        if (status == map::Occupancy::kUnknown && assumedFree(k)) status = map::Occupancy::kFree;
         status_[indexOf(k)] = static_cast<std::uint8_t>(status);
       }
 }
@@ -242,6 +261,27 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
 
 bool TraversabilityGrid::insideBox(const Eigen::Vector3d& p) const {
   return p.allFinite() && box_world_.contains(p);
+}
+
+std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafe(const Eigen::Vector3d& p_world, double radius_m) const {
+  if (!p_world.allFinite() || !(radius_m >= 0.0)) return std::nullopt;
+  const int reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
+  const VoxelKey centre = map::pointToKey(p_world, inv_resolution_);
+  std::optional<Eigen::Vector3d> best;
+  double best_d = radius_m;
+  VoxelKey d;
+  for (d.z() = -reach; d.z() <= reach; ++d.z())
+    for (d.y() = -reach; d.y() <= reach; ++d.y())
+      for (d.x() = -reach; d.x() <= reach; ++d.x()) {
+        const VoxelKey k = centre + d;
+        const Eigen::Vector3d c = map::keyToCentre(k, resolution_);
+        const double dist = (c - p_world).norm();
+        if (dist <= best_d && (!best || dist < best_d) && insideBox(c) && isSafeKey(k)) {
+          best = c;
+          best_d = dist;
+        }
+      }
+  return best;
 }
 
 bool TraversabilityGrid::isSafeKey(const VoxelKey& key) const {

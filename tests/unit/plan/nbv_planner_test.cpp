@@ -22,6 +22,7 @@ PlannerConfig roomConfig(std::uint64_t seed = 1) {
   c.box_min_world_m = kRoom.min();
   c.box_max_world_m = kRoom.max();
   c.seed = seed;
+  c.assume_free_radius_m = 0.0;  // the maps carry all the free space the tests mean
   return c;
 }
 
@@ -290,6 +291,7 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   c.box_min_world_m = {-8.0, -8.0, -4.5};
   c.box_max_world_m = {8.0, 8.0, 0.5};
   c.n_tol = 30;
+  c.assume_free_radius_m = 0.0;
   const Eigen::AlignedBox3d box(c.box_min_world_m, c.box_max_world_m);
   // A start where the collision box is in known free space, inside the first lap.
   const auto grid0 = TraversabilityGrid::build(*newest(), box, c.collision_box_m).value();

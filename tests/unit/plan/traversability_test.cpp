@@ -221,5 +221,33 @@ TEST(Traversability, BadBoxesAreErrors) {
   EXPECT_FALSE(g.edgeIsFree(Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d(nan, 0.5, 0.5)));
 }
 
+// The assumed-free sphere around the start: unknown space there counts as free, occupied space
+// stays blocked, nothing outside it changes; the same after an incremental update.
+TEST_F(PierTraversability, AssumedFreeSphereFreesUnknownOnly) {
+  const auto map = merged(0, entries_->size());
+  const Eigen::Vector3d centre(0.0, -6.0, -2.0);  // open water beside the pier
+  const AssumedFree sphere{centre, 1.5};
+  const auto plain = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
+  const auto with = TraversabilityGrid::build(*map, kPierBox, kCollisionBox, sphere).value();
+  ASSERT_TRUE(with.isSafe(centre));
+  std::size_t freed = 0;
+  for (double x = -3.0; x <= 3.0; x += 0.05)
+    for (double z = -4.0; z <= 0.0; z += 0.05) {
+      const Eigen::Vector3d p(x, -6.0, z);
+      const map::VoxelKey k = map::pointToKey(p, 1.0 / map->resolution());
+      const map::Occupancy before = plain.status(k);
+      const map::Occupancy after = with.status(k);
+      const bool inside = (map::keyToCentre(k, map->resolution()) - centre).norm() <= 1.5;
+      if (before == map::Occupancy::kUnknown && inside) {
+        EXPECT_EQ(after, map::Occupancy::kFree);
+        ++freed;
+      } else {
+        EXPECT_EQ(after, before);
+      }
+    }
+  EXPECT_GT(freed, 0u);
+  EXPECT_FALSE(TraversabilityGrid::build(*map, kPierBox, kCollisionBox, {centre, -1.0}).ok());
+}
+
 }  // namespace
 }  // namespace vog::plan

@@ -40,6 +40,21 @@ struct PlannerConfig {
   // Thesis 4.5.3 two-step sampling: share of samples drawn in x-y at the current depth; the rest
   // are drawn along z at the current x-y (our choice).
   double xy_sample_share = 0.7;
+  // Unknown space within this distance of the home (start) position counts as free for collision
+  // checks (never occupied space). The vertical fan leaves the vehicle's near field unobserved above
+  // and below its plane (at range r it covers +-0.26 r), so without this no first edge is ever
+  // free; it states the operator's guarantee that the vehicle was put in at open water there
+  // (Bircher 2016 initialises the same way). 0 = off (our choice: 1.5 m, past that blind zone).
+  double assume_free_radius_m = 1.5;
+  // The tree grows from the nearest safe position within this distance of the vehicle's estimate
+  // when the estimate itself is not safe (the vehicle stops within its navigation and control error
+  // of a waypoint; our choice: two voxels at the default resolution).
+  double root_tolerance_m = 0.2;
+  // false: Bircher 2016's sampling (the thesis's baseline): uniform in the box, any heading.
+  bool constrained_sampling = true;
+  // false: gain of the edge's end pose only (Bircher 2016, the thesis's baseline); true: the fan
+  // swept along the edge (thesis 4.5.4).
+  bool gain_along_edge = true;
   // Gain per voxel by status (thesis 4.3.1: most gain on unknown space).
   double gain_unknown = 1.0;
   double gain_free = 0.0;

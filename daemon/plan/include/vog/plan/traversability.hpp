@@ -28,9 +28,17 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace vog::plan {
+
+// Unknown voxels whose centre lies within radius_m of centre_world count as free (never occupied
+// ones). radius 0: none.
+struct AssumedFree {
+  Eigen::Vector3d centre_world = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
+};
 
 struct TraversabilityUpdate {
   bool rebuilt = false;          // the snapshot was not a descendant: rebuilt from scratch
@@ -42,7 +50,7 @@ class TraversabilityGrid {
  public:
   // box: the exploration box (world frame); collision_box_m: full side lengths of the vehicle's box.
   static Result<TraversabilityGrid> build(const map::MergedMap& map, const Eigen::AlignedBox3d& box_world,
-                                          const Eigen::Vector3d& collision_box_m);
+                                          const Eigen::Vector3d& collision_box_m, const AssumedFree& assumed_free = {});
 
   // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot with an
   // older version than the grid's, or of another resolution, gives an error (the caller rebuilds).
@@ -51,6 +59,8 @@ class TraversabilityGrid {
   // Is a collision box centred at p (world) inside the exploration box and in known free space?
   bool isSafe(const Eigen::Vector3d& p_world) const;
   bool isSafeKey(const map::VoxelKey& key) const;
+  // The centre of the safe voxel nearest to p within radius_m (ties: lowest z, y, x), or nullopt.
+  std::optional<Eigen::Vector3d> nearestSafe(const Eigen::Vector3d& p_world, double radius_m) const;
   // Is the collision box swept from a to b in known free space, with a and b in the exploration box?
   bool edgeIsFree(const Eigen::Vector3d& a_world, const Eigen::Vector3d& b_world) const;
   bool insideBox(const Eigen::Vector3d& p_world) const;
@@ -77,6 +87,10 @@ class TraversabilityGrid {
   bool sameFlags(const TraversabilityGrid& other) const;
 
  private:
+  bool assumedFree(const map::VoxelKey& k) const {
+    return assumed_free_.radius_m > 0.0 &&
+           (map::keyToCentre(k, resolution_) - assumed_free_.centre_world).norm() <= assumed_free_.radius_m;
+  }
   TraversabilityGrid() = default;
   std::size_t indexOf(const map::VoxelKey& k) const {
     const map::VoxelKey d = k - grid_.min;
@@ -90,6 +104,7 @@ class TraversabilityGrid {
   void recompute(map::KeyBox region);
 
   double resolution_ = 0.0;
+  AssumedFree assumed_free_;
   double inv_resolution_ = 0.0;
   map::LogOddsBounds bounds_;
   Eigen::AlignedBox3d box_world_;

@@ -1,0 +1,458 @@
+// vog-bench mission: autonomous exploration in closed loop (thesis 4.4-4.5), in lockstep simulated time.
+// The simulator drives the vehicle and its sensors; every sonar scan goes to the mapping side, the map
+// is merged after every change, and whenever the vehicle reaches its waypoint the next-best-view
+// planner chooses the next one on the newest map snapshot. Modes (thesis Table 4.3):
+//   baseline  one global OcTree built at raw odometry, Bircher-style planner (unconstrained sampling,
+//             gain at the end point of an edge only);
+//   vog       VOG-Map of submaps at raw odometry, the sonar planner (constrained sampling, gain swept
+//             along each edge), no loop closures;
+//   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges).
+// The planner works in the estimated (map) frame; a waypoint reaches the simulated vehicle through the
+// current navigation error, as a real controller steering on its own estimate would follow it.
+// Outputs one JSON object, and with --out the per-iteration CSVs that scripts/plot-mission draws.
+// Run from the repository root (scene paths are relative to it) or pass --scene.
+#include "bench_registry.hpp"
+#include "reconstruction_eval.hpp"
+
+#include "vog/map/merged_map.hpp"
+#include "vog/map/voxel_key.hpp"
+#include "vog/plan/nbv_planner.hpp"
+#include "vog/sim/lockstep.hpp"
+#include "vog/sim/scene.hpp"
+#include "vog/sim/world.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
+
+#include <CLI/CLI.hpp>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using vog::geometry::Pose3;
+namespace map = vog::map;
+namespace plan = vog::plan;
+namespace sim = vog::sim;
+namespace slam = vog::slam;
+
+enum class Mode { kBaseline, kVog, kVogLc };
+
+// Sonar scans waiting for the mapping side, with the truth beside them.
+struct PendingScan {
+  slam::ScanInput input;
+  Pose3 T_true;
+};
+
+class ScanQueue final : public sim::SimulationSink {
+ public:
+  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const Pose3& T_true, const Pose3& T_odom) override {
+    PendingScan p;
+    p.input.T_world_vehicle_odom = T_odom;
+    const Eigen::Vector3d rpy = vog::geometry::rpyFromRotation(T_odom.linear());
+    p.input.z_roll_pitch = Eigen::Vector3d(T_odom.translation().z(), rpy.x(), rpy.y());
+    p.input.scan = ping.scan;
+    p.T_true = T_true;
+    pending.push_back(std::move(p));
+  }
+  void truth(const sim::VehicleState& /*state*/, const Pose3& T_odom) override { T_odom_now = T_odom; }
+
+  std::deque<PendingScan> pending;
+  Pose3 T_odom_now = Pose3::Identity();
+};
+
+plan::Waypoint toWaypoint(const Pose3& T) {
+  return {T.translation(), vog::geometry::yawOf(T.linear())};
+}
+
+Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
+  return vog::geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
+}
+
+// Share of `points` (world frame) within `radius` of an occupied voxel of `snapshot`.
+double coverageOf(const map::MergedMap& snapshot, const std::vector<Eigen::Vector3d>& points, double radius_m) {
+  if (points.empty()) return 0.0;
+  const double res = snapshot.resolution();
+  const int reach = static_cast<int>(std::ceil(radius_m / res));
+  std::size_t covered = 0;
+  for (const Eigen::Vector3d& p : points) {
+    const map::VoxelKey centre = map::pointToKey(p, 1.0 / res);
+    bool hit = false;
+    for (int dz = -reach; dz <= reach && !hit; ++dz)
+      for (int dy = -reach; dy <= reach && !hit; ++dy)
+        for (int dx = -reach; dx <= reach && !hit; ++dx) {
+          const map::VoxelKey k = centre + map::VoxelKey(dx, dy, dz);
+          if ((map::keyToCentre(k, res) - p).norm() > radius_m) continue;
+          hit = snapshot.at(k).status == map::Occupancy::kOccupied;
+        }
+    if (hit) ++covered;
+  }
+  return static_cast<double>(covered) / static_cast<double>(points.size());
+}
+
+struct IterationRow {
+  int iteration = 0;
+  double sim_s = 0.0;
+  std::size_t n_submaps = 0;
+  double plan_ms = 0.0;
+  std::string status;
+  double best_gain = 0.0;
+  int tree_size = 0;
+  double coverage = -1.0;  // computed every few iterations only
+};
+
+struct MergeRow {
+  double sim_s = 0.0;
+  std::size_t n_submaps = 0;
+  double merge_ms = 0.0;
+  int remerged = 0;
+};
+
+}  // namespace
+
+VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE, planning and merge times") {
+  std::string scene_file = "config/scenes/propeller.yaml";
+  std::string mode_name = "vog-lc";
+  std::uint64_t seed = 1;
+  int submap_budget = 156;  // thesis Table 4.2
+  double max_sim_s = 7200.0;
+  int coverage_every = 10;
+  std::string out_dir;
+  bool json = false;
+  CLI::App app{"vog-bench mission"};
+  app.add_option("--scene", scene_file, "scene YAML file");
+  app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
+  app.add_option("--seed", seed, "simulation and planner seed");
+  app.add_option("--submaps", submap_budget, "submap budget (thesis Table 4.2: 156)")->check(CLI::Range(1, 100000));
+  app.add_option("--max-sim-s", max_sim_s, "simulated time limit, s")->check(CLI::Range(1.0, 1e7));
+  app.add_option("--coverage-every", coverage_every, "compute coverage every n planning iterations")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
+  app.add_flag("--json", json, "print JSON (the only output format)");
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  auto fail = [](const std::string& message) {
+    std::cerr << "mission bench: " << message << "\n";
+    return 1;
+  };
+  Mode mode;
+  if (mode_name == "baseline") {
+    mode = Mode::kBaseline;
+  } else if (mode_name == "vog") {
+    mode = Mode::kVog;
+  } else if (mode_name == "vog-lc") {
+    mode = Mode::kVogLc;
+  } else {
+    return fail("--mode must be baseline, vog or vog-lc, got '" + mode_name + "'");
+  }
+
+  auto scene = sim::loadScene(scene_file);
+  if (!scene) return fail(scene.error().message);
+  auto world_r = sim::World::create(*scene);
+  if (!world_r) return fail(world_r.error().message);
+  const sim::World& world = **world_r;
+  const vog::bench::Stopwatch total;
+
+  // Ground truth for coverage: surface points observable from a collision-free position in the box.
+  sim::ObservableConfig oc;
+  auto observable = sim::observablePoints(world, world.sampleSurface(0.1, seed), oc);
+  if (!observable) return fail(observable.error().message);
+
+  // Simulation: thesis Eq. 4.1 rates as a random walk at a quarter of them (as vog-bench slam).
+  sim::LockstepConfig sc;
+  sc.seed = seed;
+  sc.frame_every = 0;
+  sc.odometry.profile = sim::OdometryNoiseProfile::kRandomWalk;
+  sc.odometry.sigma2_x_m2ps *= 0.25;
+  sc.odometry.sigma2_y_m2ps *= 0.25;
+  sc.odometry.sigma2_yaw_rad2ps *= 0.25;
+  auto sim_r = sim::LockstepSimulation::create(world, sc);
+  if (!sim_r) return fail(sim_r.error().message);
+  sim::LockstepSimulation& simulation = *sim_r;
+
+  // Mapping: library defaults.
+  slam::MappingPipelineConfig mc;
+  mc.loop_closures = mode == Mode::kVogLc;
+  mc.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
+  auto pipeline_r = slam::MappingPipeline::create(mc);
+  if (!pipeline_r) return fail(pipeline_r.error().message);
+  slam::MappingPipeline& pipeline = **pipeline_r;
+  const map::GridConfig& grid_config = mc.builder.grid;
+  const vog::geometry::SonarFan& fan = mc.builder.fan;
+  auto merged_r = map::MergedMap::create(grid_config);
+  if (!merged_r) return fail(merged_r.error().message);
+  map::MergedMap& merged = **merged_r;
+  // Baseline: one global grid in the world frame at raw odometry.
+  auto global_r = map::LocalGrid::create(grid_config);
+  if (!global_r) return fail(global_r.error().message);
+  map::LocalGrid& global = **global_r;
+  std::shared_ptr<const map::MergedMap> baseline_snapshot;
+  std::size_t baseline_scans = 0;
+  // Reference reconstruction: every scan at its true pose.
+  auto truth_r = map::LocalGrid::create(grid_config);
+  if (!truth_r) return fail(truth_r.error().message);
+  map::LocalGrid& truth_grid = **truth_r;
+
+  plan::PlannerConfig pc;
+  pc.box_min_world_m = scene->bounds_world.min();
+  pc.box_max_world_m = scene->bounds_world.max();
+  pc.seed = seed;
+  pc.fan = fan;
+  if (mode == Mode::kBaseline) {
+    pc.constrained_sampling = false;
+    pc.gain_along_edge = false;
+  }
+  const Pose3 T_start = scene->T_world_start;
+  auto planner_r = plan::NbvPlanner::create(pc, toWaypoint(T_start));
+  if (!planner_r) return fail(planner_r.error().message);
+  plan::NbvPlanner& planner = **planner_r;
+
+  std::vector<IterationRow> iterations;
+  std::vector<MergeRow> merges;
+  std::vector<double> plan_ms_all, merge_ms_all;
+  std::vector<std::pair<Pose3, Pose3>> path_samples;  // (true, estimated) once per second
+  ScanQueue queue;
+  auto simS = [&] { return 1e-9 * static_cast<double>(simulation.stampNs()); };
+  auto nSubmaps = [&] {
+    return mode == Mode::kBaseline ? baseline_scans / static_cast<std::size_t>(mc.builder.max_scans)
+                                   : pipeline.submaps().size();
+  };
+
+  // The estimated pose: odometry since the newest submap's base, composed onto its optimised pose.
+  auto estimatedPose = [&]() -> Pose3 {
+    if (mode == Mode::kBaseline || pipeline.submaps().empty()) return queue.T_odom_now;
+    const slam::SubmapRecord& r = pipeline.submaps().back();
+    return r.T_world_base * r.T_world_base_odom.inverse() * queue.T_odom_now;
+  };
+
+  vog::Status mapping_error;
+  auto processScans = [&] {
+    while (!queue.pending.empty()) {
+      PendingScan p = std::move(queue.pending.front());
+      queue.pending.pop_front();
+      if (auto st = truth_grid.insertScan(p.T_true * fan.T_vehicle_sensor, fan, p.input.scan); !st) {
+        mapping_error = st;
+        return;
+      }
+      if (mode == Mode::kBaseline) {
+        if (auto st = global.insertScan(p.input.T_world_vehicle_odom * fan.T_vehicle_sensor, fan, p.input.scan); !st) {
+          mapping_error = st;
+          return;
+        }
+        ++baseline_scans;
+        continue;
+      }
+      auto u = pipeline.feed(p.input);
+      if (!u) {
+        mapping_error = u.error();
+        return;
+      }
+      if (!u->closed_submap && u->moved.empty()) continue;
+      const vog::bench::Stopwatch w;
+      auto stats = merged.sync(pipeline.map().entries(), map::MergeConfig{});
+      if (!stats) {
+        mapping_error = stats.error();
+        return;
+      }
+      const double ms = 1e3 * w.seconds();
+      merge_ms_all.push_back(ms);
+      merges.push_back({simS(), pipeline.submaps().size(), ms, stats->remerged});
+    }
+  };
+
+  // The map the planner sees. Baseline: a finalized copy of the global grid (its cost is the
+  // baseline's map update, counted as a merge).
+  auto snapshot = [&]() -> vog::Result<std::shared_ptr<const map::MergedMap>> {
+    if (mode != Mode::kBaseline) return merged.snapshot();
+    const vog::bench::Stopwatch w;
+    auto copy = map::LocalGrid::fromTree(grid_config, std::make_unique<octomap::OcTree>(global.tree()));
+    if (!copy) return copy.error();
+    auto m = map::MergedMap::create(grid_config);
+    if (!m) return m.error();
+    map::SubmapEntry e;
+    e.id = 0;
+    e.grid = std::shared_ptr<const map::LocalGrid>(std::move(copy).value());
+    if (auto st = (*m)->add(e); !st) return st.error();
+    const double ms = 1e3 * w.seconds();
+    merge_ms_all.push_back(ms);
+    merges.push_back({simS(), nSubmaps(), ms, 0});
+    baseline_snapshot = (*m)->snapshot();
+    return baseline_snapshot;
+  };
+
+  // Sends planner waypoints (map frame) to the vehicle (true frame) through the current navigation error.
+  auto sendWaypoints = [&](const std::vector<plan::Waypoint>& wps) -> vog::Status {
+    const Pose3 T_correction = simulation.vehicle().state().T_world_vehicle() * estimatedPose().inverse();
+    std::vector<sim::Waypoint> out;
+    for (const plan::Waypoint& w : wps) {
+      const Pose3 T = T_correction * fromWaypoint(w.p_world, w.yaw_rad);
+      out.push_back({T.translation(), vog::geometry::yawOf(T.linear())});
+    }
+    return simulation.vehicle().setWaypoints(std::move(out));
+  };
+
+  // Start: a full turn on the spot, so the planner has known free space to grow its tree in.
+  {
+    const sim::VehicleState& s = simulation.vehicle().state();
+    std::vector<sim::Waypoint> spin;
+    for (int k = 1; k <= 4; ++k) spin.push_back({s.xyz_world, vog::geometry::wrapAngle(s.yaw_rad + k * M_PI / 2)});
+    if (auto st = simulation.vehicle().setWaypoints(spin); !st) return fail(st.error().message);
+  }
+  simulation.start(queue);
+  std::string end_reason = "budget";
+  bool returning = false;
+  int stalled = 0;
+  std::int64_t next_path_sample_ns = 0;
+  std::uint64_t collisions = 0;
+  while (true) {
+    const sim::StepResult step = simulation.step(queue);
+    processScans();
+    if (!mapping_error.ok()) return fail("mapping: " + mapping_error.error().message);
+    if (simulation.stampNs() >= next_path_sample_ns) {
+      path_samples.emplace_back(simulation.vehicle().state().T_world_vehicle(), estimatedPose());
+      next_path_sample_ns += 1'000'000'000;
+    }
+    if (step.status == sim::MotionStatus::kBlocked) {
+      ++collisions;  // the planner sent the vehicle into the scene; it was stopped short
+      if (auto st = simulation.vehicle().setWaypoints({}); !st) return fail(st.error().message);
+    }
+    if (nSubmaps() >= static_cast<std::size_t>(submap_budget)) break;
+    if (simS() >= max_sim_s) {
+      end_reason = "time_limit";
+      break;
+    }
+    if (simulation.vehicle().waypointsLeft() > 0) {
+      stalled = 0;
+      continue;
+    }
+    if (returning) {
+      end_reason = "complete";
+      break;
+    }
+    auto snap = snapshot();
+    if (!snap) return fail("map snapshot: " + snap.error().message);
+    const vog::bench::Stopwatch w;
+    auto r = planner.plan(*snap, toWaypoint(estimatedPose()));
+    const double ms = 1e3 * w.seconds();
+    if (!r) return fail("planner: " + r.error().message);
+    plan_ms_all.push_back(ms);
+    IterationRow row;
+    row.iteration = static_cast<int>(iterations.size());
+    row.sim_s = simS();
+    row.n_submaps = nSubmaps();
+    row.plan_ms = ms;
+    row.status = plan::toString(r->status);
+    row.best_gain = r->best_gain;
+    row.tree_size = r->tree_size;
+    if (row.iteration % coverage_every == 0) row.coverage = coverageOf(**snap, observable->points.points, 2 * grid_config.resolution_m);
+    iterations.push_back(row);
+    if (r->status == plan::PlanStatus::kNoPath) {
+      end_reason = "no_path: " + r->reason;
+      break;
+    }
+    if (r->status == plan::PlanStatus::kComplete) returning = true;
+    if (r->waypoints.empty() || ++stalled > 50) {
+      end_reason = "stalled";
+      break;
+    }
+    if (auto st = sendWaypoints(r->waypoints); !st) return fail(st.error().message);
+  }
+
+  // Final map and evaluation.
+  if (mode != Mode::kBaseline) {
+    auto u = pipeline.finish();
+    if (!u) return fail(u.error().message);
+    auto stats = merged.sync(pipeline.map().entries(), map::MergeConfig{});
+    if (!stats) return fail(stats.error().message);
+  }
+  auto final_snap = snapshot();
+  if (!final_snap) return fail(final_snap.error().message);
+  truth_grid.finalize();
+  const vog::bench::ReferenceReconstruction reference(truth_grid);
+  std::vector<Eigen::Vector3d> estimate;
+  if (mode == Mode::kBaseline) {
+    global.finalize();
+    vog::bench::appendOccupiedCentres(global, Pose3::Identity(), estimate);
+  } else {
+    for (const map::SubmapEntry& e : pipeline.map().entries())
+      vog::bench::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
+  }
+  auto error = vog::bench::reconstructionError(estimate, reference);
+  if (!error) return fail(error.error().message);
+  // Final coverage after the same rigid alignment as the RMSE (the map lives in the estimated frame):
+  // the observable points are mapped into it.
+  std::vector<Eigen::Vector3d> observable_in_map;
+  const Pose3 T_estimate_reference = error->T_reference_estimate.inverse();
+  for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(T_estimate_reference * p);
+  const double coverage = coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m);
+  const double coverage_unaligned = coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
+  if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
+
+  if (!out_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec) return fail("cannot create " + out_dir + ": " + ec.message());
+    std::ofstream it(std::filesystem::path(out_dir) / "iterations.csv");
+    it << "iteration,sim_s,n_submaps,plan_ms,status,best_gain,tree_size,coverage\n";
+    for (const IterationRow& r : iterations) {
+      it << r.iteration << ',' << r.sim_s << ',' << r.n_submaps << ',' << r.plan_ms << ',' << r.status << ','
+         << r.best_gain << ',' << r.tree_size << ',';
+      if (r.coverage >= 0.0) it << r.coverage;
+      it << '\n';
+    }
+    std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
+    mg << "sim_s,n_submaps,merge_ms,remerged\n";
+    for (const MergeRow& r : merges) mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << '\n';
+    std::ofstream pa(std::filesystem::path(out_dir) / "path.csv");
+    pa << "true_x_m,true_y_m,true_z_m,est_x_m,est_y_m,est_z_m\n";
+    for (const auto& [T_true, T_est] : path_samples) {
+      const Eigen::Vector3d a = T_true.translation(), b = T_est.translation();
+      pa << a.x() << ',' << a.y() << ',' << a.z() << ',' << b.x() << ',' << b.y() << ',' << b.z() << '\n';
+    }
+    std::ofstream mp(std::filesystem::path(out_dir) / "map_points.csv");
+    mp << "x_m,y_m,z_m\n";
+    for (const Eigen::Vector3d& p : estimate) mp << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+    for (const std::ofstream* f : {&it, &mg, &pa, &mp})
+      if (!*f) return fail("error while writing the CSV files in " + out_dir);
+  }
+
+  const double path_m = simulation.pathLengthM();
+  vog::bench::JsonObject out;
+  out.add("scene", scene->name);
+  out.add("mode", mode_name);
+  out.add("seed", static_cast<std::int64_t>(seed));
+  out.add("end", end_reason);
+  out.add("coverage", coverage);
+  out.add("coverage_unaligned", coverage_unaligned);
+  out.add("rmse", error->rmse_m);
+  out.add("rmse_unaligned", error->rmse_unaligned_m);
+  out.add("path_m", path_m);
+  out.add("n_submaps", static_cast<std::int64_t>(nSubmaps()));
+  out.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
+  out.add("sim_s", simS());
+  out.add("wall_s", total.seconds());
+  out.add("realtime_factor", simS() / total.seconds());
+  out.add("plan_iterations", static_cast<std::int64_t>(plan_ms_all.size()));
+  out.add("plan_ms_mean", plan_ms_all.empty() ? 0.0 : [&] {
+    double s = 0.0;
+    for (double v : plan_ms_all) s += v;
+    return s / static_cast<double>(plan_ms_all.size());
+  }());
+  out.add("plan_ms_p95", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 0.95));
+  out.add("plan_ms_max", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 1.0));
+  out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
+  out.add("collisions", static_cast<std::int64_t>(collisions));
+  out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
+  std::cout << out.str();
+  return 0;
+}
