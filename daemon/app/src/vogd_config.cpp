@@ -99,6 +99,10 @@ void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
   m.number("v_max_mps", c.v_max_mps, 0.01, 10.0);
   m.degrees("yaw_rate_deg_per_s", c.yaw_rate_radps, 0.1, 180.0);
   m.number("xy_sample_share", c.xy_sample_share, 0.0, 1.0);
+  m.boolean("constrained_sampling", c.constrained_sampling);
+  m.boolean("gain_along_edge", c.gain_along_edge);
+  m.number("assume_free_radius_m", c.assume_free_radius_m, 0.0, 100.0);
+  m.number("root_tolerance_m", c.root_tolerance_m, 0.0, 10.0);
   m.number("gain_unknown", c.gain_unknown, 0.0, 1e6);
   m.number("gain_free", c.gain_free, 0.0, 1e6);
   m.number("gain_occupied", c.gain_occupied, 0.0, 1e6);

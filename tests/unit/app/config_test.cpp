@@ -90,6 +90,10 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(pa.v_max_mps, pb.v_max_mps);
   EXPECT_NEAR(pa.yaw_rate_radps, pb.yaw_rate_radps, 1e-5);
   EXPECT_EQ(pa.xy_sample_share, pb.xy_sample_share);
+  EXPECT_EQ(pa.constrained_sampling, pb.constrained_sampling);
+  EXPECT_EQ(pa.gain_along_edge, pb.gain_along_edge);
+  EXPECT_EQ(pa.assume_free_radius_m, pb.assume_free_radius_m);
+  EXPECT_EQ(pa.root_tolerance_m, pb.root_tolerance_m);
   EXPECT_EQ(pa.gain_unknown, pb.gain_unknown);
   EXPECT_EQ(pa.gain_free, pb.gain_free);
   EXPECT_EQ(pa.gain_occupied, pb.gain_occupied);
