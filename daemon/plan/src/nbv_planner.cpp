@@ -71,7 +71,8 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
     if (grid_->update(map).ok()) return {};
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
-  auto built = TraversabilityGrid::build(map, box, config_.collision_box_m, {home_.p_world, config_.assume_free_radius_m});
+  auto built = TraversabilityGrid::build(map, box, anyHeadingBox(config_.collision_box_m),
+                                        {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
   return {};
@@ -90,13 +91,22 @@ void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& 
   tree_.push_back(n);
 }
 
+Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m) {
+  const double side_xy = collision_box_m.head<2>().norm();
+  return {side_xy, side_xy, collision_box_m.z()};
+}
+
 Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
   if (!snapshot) return Error{"plan: no map snapshot was given"};
   const map::MergedMap& map = *snapshot;
   if (!current.p_world.allFinite() || !std::isfinite(current.yaw_rad))
     return Error{"plan: current pose " + describe(current.p_world) + " yaw " + std::to_string(current.yaw_rad) +
                  " is not finite"};
-  if (!inBox(config_, current.p_world)) return Error{outsideBox("plan: current position", config_, current.p_world)};
+  // A loop closure can move the estimate a little outside the box: within root_tolerance_m the tree
+  // grows from the nearest safe position inside it (below).
+  const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
+  if (box.exteriorDistance(current.p_world) > config_.root_tolerance_m)
+    return Error{outsideBox("plan: current position", config_, current.p_world)};
   if (map.query(current.p_world).status == map::Occupancy::kOccupied)
     return Error{"plan: current position " + describe(current.p_world) + " is inside an obstacle (occupied voxel)"};
   if (Status s = syncTraversability(map); !s.ok()) return s.error();

@@ -202,6 +202,11 @@ TEST_F(PlannerMaps, ErrorsNameTheBadInput) {
   err = planner->plan(map, {{-3.0, 0.0, 2.0}, 0.0});
   ASSERT_FALSE(err.ok());
   EXPECT_NE(err.error().message.find("outside the exploration box"), std::string::npos);
+  // Within root_tolerance_m of the box (a loop closure moved the estimate): not an error; here no
+  // safe voxel is that close, so there is no path.
+  const auto near_wall = planner->plan(map, {{5.1, 0.0, -1.75}, 0.0});
+  ASSERT_TRUE(near_wall.ok()) << near_wall.error().message;
+  EXPECT_EQ(near_wall->status, PlanStatus::kNoPath);
   // Inside the west wall (an occupied voxel).
   const double res = map->resolution();
   const Eigen::Vector3d wall = map::keyToCentre(map::pointToKey(Eigen::Vector3d(-5.0, 0.0, -1.75), 1.0 / res) -
@@ -231,11 +236,11 @@ TEST(NbvPlanner, BoxedInIsNoPathNotAHang) {
     EXPECT_EQ(r.status, PlanStatus::kNoPath);
     EXPECT_NE(r.reason.find("collision box"), std::string::npos) << r.reason;
   }
-  // (b) A pocket 13 x 13 x 7 voxels walled in by occupied voxels: the box fits in exactly one voxel,
-  // so no edge does.
+  // (b) A pocket 17 x 17 x 7 voxels walled in by occupied voxels: the box at any heading (1.41 m
+  // in x and y) fits in exactly one voxel, so no edge does.
   {
-    const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-6, -6, -21), res);
-    const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(6, 6, -15), res);
+    const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-8, -8, -21), res);
+    const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(8, 8, -15), res);
     auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), all)});
     auto planner = NbvPlanner::create(c, {centre, 0.0}).value();
     ASSERT_TRUE(planner->plan(map->snapshot(), {centre, 0.0}).ok());
@@ -341,7 +346,7 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   // The planner's incrementally updated grid equals one built from the final snapshot.
   const auto final_snap = newest();
   ASSERT_TRUE(planner->plan(final_snap, current).ok());
-  const auto scratch = TraversabilityGrid::build(*final_snap, box, c.collision_box_m).value();
+  const auto scratch = TraversabilityGrid::build(*final_snap, box, anyHeadingBox(c.collision_box_m)).value();
   EXPECT_TRUE(planner->traversability()->sameFlags(scratch));
 }
 

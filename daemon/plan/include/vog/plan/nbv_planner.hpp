@@ -63,6 +63,10 @@ struct PlanResult {
   std::string reason;                 // why kComplete / kNoPath
 };
 
+// The vehicle turns while it moves, so its collision box may face any heading: collisions are checked
+// for the axis-aligned box that holds it at every yaw (x and y sides = the diagonal of its footprint).
+Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m);
+
 class NbvPlanner {
  public:
   // Errors name the bad config key, or say the home pose is not finite or not inside the box.
