@@ -1,6 +1,7 @@
 // vog-bench map: builds a synthetic VogMap (submaps of 100 sonar scans of 96 beams at 0.095 m on an
 // orbit around a pier, ranges up to 5.6 m) and times merging and queries. Prints JSON.
 #include "bench_registry.hpp"
+#include "pier_submaps.hpp"
 #include "synthetic_scene.hpp"
 
 #include "vog/map/merged_map.hpp"
@@ -27,34 +28,7 @@ struct MapBenchOptions {
 };
 
 std::vector<map::SubmapEntry> buildSubmaps(const MapBenchOptions& opt, const map::GridConfig& config) {
-  const auto scene = test::SyntheticScene::pier();
-  geometry::SonarFan fan;
-  fan.max_range_m = 5.6;
-  const auto poses = test::orbitTrajectory(opt.submaps * opt.scans, 5.5, -2.0);
-  std::vector<map::SubmapEntry> entries(static_cast<std::size_t>(opt.submaps));
-  // Building is embarrassingly parallel across submaps; each submap draws noise from its own seed.
-  auto work = [&](int first, int step) {
-    for (int s = first; s < opt.submaps; s += step) {
-      std::mt19937_64 rng(opt.seed * 1000003u + static_cast<std::uint64_t>(s));
-      auto grid = map::LocalGrid::create(config).value();
-      const auto base = static_cast<std::size_t>(s * opt.scans);
-      const geometry::Pose3 T_base_world = poses[base].inverse();
-      for (int k = 0; k < opt.scans; ++k) {
-        const geometry::Pose3& T = poses[base + static_cast<std::size_t>(k)];
-        (void)grid->insertScan(T_base_world * T * fan.T_vehicle_sensor, fan, scene.scan(T, fan, 0.01, rng));
-      }
-      grid->finalize();
-      auto& e = entries[static_cast<std::size_t>(s)];
-      e.id = static_cast<map::SubmapId>(s);
-      e.grid = std::move(grid);
-      e.T_world_submap = poses[base];
-      e.T_submap_world = T_base_world;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < opt.threads; ++t) pool.emplace_back(work, t, opt.threads);
-  for (auto& t : pool) t.join();
-  return entries;
+  return vog::bench::buildPierSubmaps(config, opt.submaps, opt.scans, opt.threads, opt.seed);
 }
 
 template <class F>

@@ -71,29 +71,14 @@ std::vector<Waypoint> SonarGain::interpolate(const Waypoint& from, const Waypoin
 
 bool SonarGain::castCached(const TraversabilityGrid& cache, const Eigen::Vector3d& origin, const Eigen::Vector3d& end,
                            double& gain) {
-  const double res = resolution_m_;
-  const double inv_res = 1.0 / resolution_m_;
-  map::VoxelKey key = map::pointToKey(origin, inv_res);
-  if (!box_keys_.contains(key)) return false;
   // The stepping of MergedMap::traverse, operation for operation, so the voxels are the same.
-  const map::VoxelKey last = map::pointToKey(end, inv_res);
-  const Eigen::Vector3d d = end - origin;
-  const double length = d.norm();
-  Eigen::Vector3i step;
-  Eigen::Vector3d t_max;
-  Eigen::Vector3d t_delta;
-  for (int i = 0; i < 3; ++i) {
-    if (length == 0.0 || d[i] == 0.0) {
-      step[i] = 0;
-      t_max[i] = std::numeric_limits<double>::infinity();
-      t_delta[i] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    step[i] = d[i] > 0.0 ? 1 : -1;
-    const double boundary = (key[i] + (step[i] > 0 ? 1 : 0)) * res;
-    t_max[i] = (boundary - origin[i]) / d[i];
-    t_delta[i] = res / std::abs(d[i]);
-  }
+  const map::VoxelWalk walk = map::startVoxelWalk(origin, end, resolution_m_, 1.0 / resolution_m_);
+  const map::VoxelKey& key = walk.key;
+  if (!box_keys_.contains(key)) return false;
+  const map::VoxelKey& last = walk.last;
+  const Eigen::Vector3i& step = walk.step;
+  const Eigen::Vector3d& t_max = walk.t_max;
+  const Eigen::Vector3d& t_delta = walk.t_delta;
   // The walk below is the loop of MergedMap::traverse with its bookkeeping made incremental: linear
   // indices into the status array and the bitset, the steps left inside the box per axis, and the
   // L1 distance to the end key (zero exactly when traverse's `key == last` holds).

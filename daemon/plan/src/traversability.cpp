@@ -295,35 +295,18 @@ bool TraversabilityGrid::isSafe(const Eigen::Vector3d& p) const {
 bool TraversabilityGrid::edgeIsFree(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
   // The exploration box is convex: both ends inside keep the whole edge inside.
   if (!insideBox(a) || !insideBox(b)) return false;
-  VoxelKey key = map::pointToKey(a, inv_resolution_);
-  const VoxelKey last = map::pointToKey(b, inv_resolution_);
-  const Eigen::Vector3d d = b - a;
-  Eigen::Vector3i step;
-  Eigen::Vector3d t_max;
-  Eigen::Vector3d t_delta;
-  for (int i = 0; i < 3; ++i) {
-    if (d[i] == 0.0) {
-      step[i] = 0;
-      t_max[i] = std::numeric_limits<double>::infinity();
-      t_delta[i] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    step[i] = d[i] > 0.0 ? 1 : -1;
-    const double boundary = (key[i] + (step[i] > 0 ? 1 : 0)) * resolution_;
-    t_max[i] = (boundary - a[i]) / d[i];
-    t_delta[i] = resolution_ / std::abs(d[i]);
-  }
+  map::VoxelWalk w = map::startVoxelWalk(a, b, resolution_, inv_resolution_);
+  VoxelKey& key = w.key;
+  const VoxelKey last = w.last;
   // Every voxel between the two end keys is visited at most once; the bound guards against rounding.
   const long max_steps = 3 + (last - key).cwiseAbs().sum();
   for (long n = 0; n <= max_steps; ++n) {
     if (!isSafeKey(key)) return false;
     if (key == last) return true;
-    int axis = 0;
-    if (t_max[1] < t_max[axis]) axis = 1;
-    if (t_max[2] < t_max[axis]) axis = 2;
-    if (t_max[axis] > 1.0) break;
-    key[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
+    const int axis = w.nextAxis();
+    if (w.t_max[axis] > 1.0) break;
+    key[axis] += w.step[axis];
+    w.t_max[axis] += w.t_delta[axis];
   }
   // Rounding ended the walk one step short of the end voxel: check it too.
   return isSafeKey(last);

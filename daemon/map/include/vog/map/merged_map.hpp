@@ -172,26 +172,9 @@ void MergedMap::forEachKnown(F&& f) const {
 template <class Visit>
 void MergedMap::traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& end, Visit&& visit) const {
   if (!origin.allFinite() || !end.allFinite()) return;
-  const double res = config_.resolution_m;
-  VoxelKey key = pointToKey(origin, inv_resolution_);
-  const VoxelKey last = pointToKey(end, inv_resolution_);
-  const Eigen::Vector3d d = end - origin;
-  const double length = d.norm();
-  Eigen::Vector3i step;
-  Eigen::Vector3d t_max;
-  Eigen::Vector3d t_delta;
-  for (int i = 0; i < 3; ++i) {
-    if (length == 0.0 || d[i] == 0.0) {
-      step[i] = 0;
-      t_max[i] = std::numeric_limits<double>::infinity();
-      t_delta[i] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    step[i] = d[i] > 0.0 ? 1 : -1;
-    const double boundary = (key[i] + (step[i] > 0 ? 1 : 0)) * res;
-    t_max[i] = (boundary - origin[i]) / d[i];  // in units of the segment (0..1)
-    t_delta[i] = res / std::abs(d[i]);
-  }
+  VoxelWalk w = startVoxelWalk(origin, end, config_.resolution_m, inv_resolution_);
+  VoxelKey& key = w.key;
+  const VoxelKey last = w.last;
   const Block* block = nullptr;
   VoxelKey block_key = VoxelKey::Constant(std::numeric_limits<int>::min());
   // Upper bound on the number of voxels: guards against rounding loops.
@@ -205,12 +188,10 @@ void MergedMap::traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& e
     const VoxelValue value = block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{};
     if (!visit(key, value)) return;
     if (key == last) return;
-    int axis = 0;
-    if (t_max[1] < t_max[axis]) axis = 1;
-    if (t_max[2] < t_max[axis]) axis = 2;
-    if (t_max[axis] > 1.0) return;
-    key[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
+    const int axis = w.nextAxis();
+    if (w.t_max[axis] > 1.0) return;
+    key[axis] += w.step[axis];
+    w.t_max[axis] += w.t_delta[axis];
   }
 }
 
