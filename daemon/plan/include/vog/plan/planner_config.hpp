@@ -47,9 +47,10 @@ struct PlannerConfig {
   // (Bircher 2016 initialises the same way). 0 = off (our choice: 1.5 m, past that blind zone).
   double assume_free_radius_m = 1.5;
   // The tree grows from the nearest safe position within this distance of the vehicle's estimate
-  // when the estimate itself is not safe (the vehicle stops within its navigation and control error
-  // of a waypoint; our choice: two voxels at the default resolution).
-  double root_tolerance_m = 0.2;
+  // when the estimate itself is not safe: the vehicle stops within its navigation and control error
+  // of a safe waypoint, and a loop closure can move the estimate (not the vehicle) by tens of
+  // centimetres (our choice: half the collision box's side; vog-bench mission).
+  double root_tolerance_m = 0.5;
   // false: Bircher 2016's sampling (the thesis's baseline): uniform in the box, any heading.
   bool constrained_sampling = true;
   // false: gain of the edge's end pose only (Bircher 2016, the thesis's baseline); true: the fan
