@@ -32,6 +32,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -305,7 +306,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   {
     const sim::VehicleState& s = simulation.vehicle().state();
     std::vector<sim::Waypoint> spin;
-    for (int k = 1; k <= 4; ++k) spin.push_back({s.xyz_world, vog::geometry::wrapAngle(s.yaw_rad + k * M_PI / 2)});
+    for (int k = 1; k <= 4; ++k) spin.push_back({s.xyz_world, vog::geometry::wrapAngle(s.yaw_rad + k * std::numbers::pi / 2)});
     if (auto st = simulation.vehicle().setWaypoints(spin); !st) return fail(st.error().message);
   }
   simulation.start(queue);

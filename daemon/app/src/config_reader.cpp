@@ -1,5 +1,7 @@
 #include "vog/app/config_reader.hpp"
 
+#include "vog/geometry/sonar.hpp"
+
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -88,10 +90,10 @@ void ConfigMap::number(const std::string& key, double& field, double min, double
 }
 
 void ConfigMap::degrees(const std::string& key, double& field_rad, double min_deg, double max_deg) {
-  double deg = field_rad * 180.0 / M_PI;
+  double deg = geometry::rad2deg(field_rad);
   const bool present = has(key);
   number(key, deg, min_deg, max_deg);
-  if (present && !reader_->failed()) field_rad = deg * M_PI / 180.0;
+  if (present && !reader_->failed()) field_rad = geometry::deg2rad(deg);
 }
 
 void ConfigMap::integer(const std::string& key, int& field, int min, int max) {
