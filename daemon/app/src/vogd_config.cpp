@@ -5,6 +5,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 namespace vog::app {
 namespace {
@@ -244,32 +245,23 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   c.planner.box_min_world_m = c.mission.box_min_m;
   c.planner.box_max_world_m = c.mission.box_max_m;
   c.planner.fan = c.mapping.builder.fan;
-  for (const Status& s : {named("mapping", c.mapping), named("merge", c.merge), named("planner", c.planner)}) {
-    if (!s.ok()) return Error{source_name + ": " + s.error().message};
-  }
-  if (Status s = c.nav.validate("nav"); !s.ok()) return Error{source_name + ": " + s.error().message};
+  // Each component's own rules, in file order; the first failure is reported.
+  std::vector<Status> checks = {named("mapping", c.mapping), named("merge", c.merge), named("planner", c.planner),
+                                c.nav.validate("nav")};
   if (c.source == Source::kDevices) {
     const DevicesSection& d = c.devices;
-    if (d.dvl_enabled) {
-      if (Status s = d.dvl.validate("devices.dvl"); !s.ok()) return Error{source_name + ": " + s.error().message};
-    }
-    if (d.depth_enabled) {
-      if (Status s = d.depth.validate("devices.depth"); !s.ok()) return Error{source_name + ": " + s.error().message};
-    }
-    if (d.imu_enabled) {
-      if (Status s = d.imu.validate("devices.imu"); !s.ok()) return Error{source_name + ": " + s.error().message};
-    }
+    if (d.dvl_enabled) checks.push_back(d.dvl.validate("devices.dvl"));
+    if (d.depth_enabled) checks.push_back(d.depth.validate("devices.depth"));
+    if (d.imu_enabled) checks.push_back(d.imu.validate("devices.imu"));
     if (d.sonar_enabled) {
-      if (Status s = d.sonar.validate("devices.sonar"); !s.ok()) return Error{source_name + ": " + s.error().message};
-      if (Status s = named("devices.sonar.range_extraction", d.range_extraction); !s.ok())
-        return Error{source_name + ": " + s.error().message};
+      checks.push_back(d.sonar.validate("devices.sonar"));
+      checks.push_back(named("devices.sonar.range_extraction", d.range_extraction));
     }
-    if (d.backseat_enabled) {
-      if (Status s = d.backseat.validate("devices.backseat"); !s.ok()) return Error{source_name + ": " + s.error().message};
-    }
-    if (d.aux_enabled) {
-      if (Status s = d.aux.validate("devices.aux"); !s.ok()) return Error{source_name + ": " + s.error().message};
-    }
+    if (d.backseat_enabled) checks.push_back(d.backseat.validate("devices.backseat"));
+    if (d.aux_enabled) checks.push_back(d.aux.validate("devices.aux"));
+  }
+  for (const Status& s : checks) {
+    if (!s.ok()) return Error{source_name + ": " + s.error().message};
   }
   return c;
 }
