@@ -1,0 +1,83 @@
+#pragma once
+// MergeWorker: the merge thread (thesis 4.5.5, DESIGN "Threads in vogd" 3). The mapping side submits
+// the VogMap's current entries after every change; the worker brings its MergedMap in line with the
+// newest submitted set (MergedMap::sync: new submaps merged in, moved ones re-merged) and publishes an
+// immutable snapshot. Readers (planner, API) take snapshot() at any time and never wait for a merge.
+//
+// Lifecycle: create() starts the thread; submit() any number of times from any thread; the destructor
+// (or stop()) finishes the merge in progress, drops what is still queued and joins. Submissions
+// coalesce: a set submitted while an older one waits replaces it (sync() is idempotent on the newest
+// set, so nothing is lost). A failed merge is kept as error() and the worker stops merging; the last
+// good snapshot stays readable.
+// Determinism: waitIdle() returns once every submitted set is merged and published. A lockstep caller
+// that calls it at fixed points of simulated time (e.g. right before each submit) sees snapshots that
+// depend only on its inputs, while the merge still overlaps with its own work in between.
+
+#include "vog/geometry/result.hpp"
+#include "vog/map/merged_map.hpp"
+#include "vog/map/vog_map.hpp"
+
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+namespace vog::map {
+
+// One completed merge.
+struct MergeRecord {
+  std::uint64_t sequence = 0;  // of the submitted set (1, 2, ...)
+  std::size_t n_submaps = 0;
+  double merge_ms = 0.0;       // wall time of sync() + snapshot()
+  SyncStats stats;
+};
+
+class MergeWorker {
+ public:
+  static Result<std::unique_ptr<MergeWorker>> create(const GridConfig& grid, const MergeConfig& merge);
+  ~MergeWorker();
+  MergeWorker(const MergeWorker&) = delete;
+  MergeWorker& operator=(const MergeWorker&) = delete;
+
+  // Hands over the newest submap set; returns at once. Returns its sequence number.
+  std::uint64_t submit(std::vector<SubmapEntry> entries);
+  // The newest published snapshot; null before the first merge completes.
+  std::shared_ptr<const MergedMap> snapshot() const;
+  // Sequence number of the set the current snapshot reflects (0: none yet).
+  std::uint64_t mergedSequence() const;
+  // Blocks until every set submitted so far is merged (or the worker failed/stopped): the error of a
+  // failed merge, else ok.
+  Status waitIdle();
+  // Completed merges since the last call (for timing figures).
+  std::vector<MergeRecord> takeRecords();
+  // The first merge error, if any.
+  std::optional<Error> error() const;
+  // Ends the thread (idempotent); queued sets are dropped.
+  void stop();
+  // Heartbeat for a watchdog: increases whenever the thread wakes up or finishes a merge.
+  std::uint64_t heartbeat() const;
+
+ private:
+  MergeWorker(std::unique_ptr<MergedMap> merged, const MergeConfig& merge);
+  void run();
+
+  const MergeConfig config_;
+  std::unique_ptr<MergedMap> merged_;  // merge thread only
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;       // work arrived or stop
+  std::condition_variable idle_;       // a merge finished
+  std::optional<std::vector<SubmapEntry>> pending_;  // guarded by mutex_
+  std::uint64_t submitted_ = 0;                      // guarded by mutex_
+  std::uint64_t merged_sequence_ = 0;                // guarded by mutex_
+  std::shared_ptr<const MergedMap> snapshot_;        // guarded by mutex_
+  std::vector<MergeRecord> records_;                 // guarded by mutex_
+  std::optional<Error> error_;                       // guarded by mutex_
+  std::uint64_t heartbeat_ = 0;                      // guarded by mutex_
+  bool stopping_ = false;                            // guarded by mutex_
+  std::thread thread_;
+};
+
+}  // namespace vog::map

@@ -1,0 +1,108 @@
+#include "vog/map/merge_worker.hpp"
+
+#include <chrono>
+#include <utility>
+
+namespace vog::map {
+
+Result<std::unique_ptr<MergeWorker>> MergeWorker::create(const GridConfig& grid, const MergeConfig& merge) {
+  if (auto st = merge.validate(); !st) return st.error();
+  auto merged = MergedMap::create(grid);
+  if (!merged) return merged.error();
+  std::unique_ptr<MergeWorker> worker(new MergeWorker(std::move(merged).value(), merge));
+  worker->thread_ = std::thread([w = worker.get()] { w->run(); });
+  return worker;
+}
+
+MergeWorker::MergeWorker(std::unique_ptr<MergedMap> merged, const MergeConfig& merge)
+    : config_(merge), merged_(std::move(merged)) {}
+
+MergeWorker::~MergeWorker() { stop(); }
+
+void MergeWorker::stop() {
+  {
+    const std::lock_guard lock(mutex_);
+    stopping_ = true;
+    pending_.reset();
+  }
+  wake_.notify_all();
+  idle_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::uint64_t MergeWorker::submit(std::vector<SubmapEntry> entries) {
+  std::uint64_t sequence = 0;
+  {
+    const std::lock_guard lock(mutex_);
+    pending_ = std::move(entries);
+    sequence = ++submitted_;
+  }
+  wake_.notify_one();
+  return sequence;
+}
+
+std::shared_ptr<const MergedMap> MergeWorker::snapshot() const {
+  const std::lock_guard lock(mutex_);
+  return snapshot_;
+}
+
+std::uint64_t MergeWorker::mergedSequence() const {
+  const std::lock_guard lock(mutex_);
+  return merged_sequence_;
+}
+
+Status MergeWorker::waitIdle() {
+  std::unique_lock lock(mutex_);
+  idle_.wait(lock, [&] { return merged_sequence_ == submitted_ || error_ || stopping_; });
+  if (error_) return *error_;
+  return {};
+}
+
+std::vector<MergeRecord> MergeWorker::takeRecords() {
+  const std::lock_guard lock(mutex_);
+  return std::exchange(records_, {});
+}
+
+std::optional<Error> MergeWorker::error() const {
+  const std::lock_guard lock(mutex_);
+  return error_;
+}
+
+std::uint64_t MergeWorker::heartbeat() const {
+  const std::lock_guard lock(mutex_);
+  return heartbeat_;
+}
+
+void MergeWorker::run() {
+  std::unique_lock lock(mutex_);
+  while (true) {
+    // A periodic wake-up keeps the heartbeat moving while there is nothing to merge.
+    wake_.wait_for(lock, std::chrono::milliseconds(200), [&] { return stopping_ || (pending_ && !error_); });
+    ++heartbeat_;
+    if (stopping_) return;
+    if (!pending_ || error_) continue;
+    std::vector<SubmapEntry> entries = std::move(*pending_);
+    pending_.reset();
+    const std::uint64_t sequence = submitted_;
+    lock.unlock();
+
+    const auto t0 = std::chrono::steady_clock::now();
+    auto stats = merged_->sync(entries, config_);
+    std::shared_ptr<const MergedMap> snapshot;
+    if (stats) snapshot = merged_->snapshot();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    lock.lock();
+    ++heartbeat_;
+    if (!stats) {
+      error_ = Error{"merge of submap set " + std::to_string(sequence) + ": " + stats.error().message};
+    } else {
+      snapshot_ = std::move(snapshot);
+      records_.push_back({sequence, entries.size(), ms, *stats});
+    }
+    merged_sequence_ = sequence;
+    idle_.notify_all();
+  }
+}
+
+}  // namespace vog::map
