@@ -201,7 +201,12 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   std::string dir = c.mission.directory.string();
   mission.text("directory", dir);
   c.mission.directory = dir;
+  mission.text("name", c.mission.name);
+  if (c.mission.name.empty() || c.mission.name.find('/') != std::string::npos || c.mission.name == "." ||
+      c.mission.name == "..")
+    mission.fail("name", "must be a plain folder name");
   mission.boolean("start_on_launch", c.mission.start_on_launch);
+  mission.integer("max_submaps", c.mission.max_submaps, 1, 100000);
   if ((c.mission.box_max_m.array() <= c.mission.box_min_m.array()).any())
     mission.fail("box_max_m", "must exceed box_min_m on every axis");
   mission.finish();

@@ -30,7 +30,9 @@ struct MissionSection {
   Eigen::Vector3d box_min_m{-6.0, -4.5, -8.5};
   Eigen::Vector3d box_max_m{6.0, 4.5, -0.5};
   std::filesystem::path directory = "/var/lib/vogd/missions";
+  std::string name = "current";  // this mission's folder in `directory`; an existing one is resumed
   bool start_on_launch = false;  // start exploring as soon as navigation is up (simulator runs)
+  int max_submaps = 156;         // submap budget (thesis Table 4.2); reaching it sends the vehicle home
 };
 
 struct SimSection {

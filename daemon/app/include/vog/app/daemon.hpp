@@ -1,0 +1,146 @@
+#pragma once
+// Daemon: vogd's wiring (DESIGN "Threads in vogd"). One process, these threads:
+//   io        Asio io_context: the API server, signals (SIGTERM/SIGINT stop the daemon)
+//   source    the vehicle source (SimSource: the simulator) producing odometry and scans
+//   mapping   scans -> MappingPipeline (submaps, loop closures, optimisation); every closed submap is
+//             made durable (MissionStore: .ot + journal group, fsync) before the merge hears of it
+//   merge     MergeWorker: keeps the merged map current and publishes immutable snapshots
+//   planning  mission state machine + NBV planner on the newest snapshot; waypoints to the vehicle,
+//             the API and the journal
+//   main      run(): systemd notify (READY, WATCHDOG while every thread beats, STOPPING) and status
+// Queues: source -> mapping (bounded; the source waits when mapping is behind), mapping -> merge
+// (coalescing), merge -> planning/API (snapshots). Slow API clients never block any of them (the
+// server's per-client queues drop or coalesce).
+//
+// Frames: the planner works in the map frame (the optimised estimate); the vehicle steers in its odometry
+// frame. T_map_odom comes from the newest submap (its optimised base pose times the inverse of its
+// odometry base pose). After a restart the new odometry frame is aligned to the old one at the first
+// odometry sample: the vehicle is taken to be at the last waypoint sent (where its controller held it)
+// or, without one, at the newest submap's base.
+//
+// Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
+// until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
+// submap closed and stored, merge, API) and returns.
+
+#include "vog/api/api_server.hpp"
+#include "vog/api/domain.hpp"
+#include "vog/app/systemd_notify.hpp"
+#include "vog/app/vehicle_source.hpp"
+#include "vog/app/vogd_config.hpp"
+#include "vog/map/merge_worker.hpp"
+#include "vog/mission/mission_control.hpp"
+#include "vog/mission/mission_store.hpp"
+#include "vog/mission/raw_log.hpp"
+#include "vog/plan/nbv_planner.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
+
+#include <asio/io_context.hpp>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+namespace vog::app {
+
+struct DaemonOptions {
+  std::optional<std::filesystem::path> mission_dir;  // replaces mission.directory/mission.name
+  std::optional<std::filesystem::path> port_file;    // the bound API port is written here (port 0 picks one)
+};
+
+class Daemon final : public api::ApiBackend, private SourceSink {
+ public:
+  static Result<std::unique_ptr<Daemon>> create(const VogdConfig& config, const DaemonOptions& options = {});
+  ~Daemon() override;
+
+  // Blocks until stopped; the error that stopped it, if any.
+  Status run();
+  // Thread-safe.
+  void requestStop();
+
+  const std::filesystem::path& missionDir() const { return mission_dir_; }
+
+  // --- api::ApiBackend (io thread) ---
+  api::StatusReport status() const override;
+  std::shared_ptr<const map::MergedMap> mapSnapshot() const override;
+  std::vector<api::SubmapInfo> submaps() const override;
+  std::shared_ptr<const api::Cloud> cloud() const override;
+  Result<api::MissionState> command(const api::MissionCommand& command) override;
+  std::string configText() const override;
+
+ private:
+  Daemon(const VogdConfig& config, const DaemonOptions& options);
+  Status init();
+
+  // --- SourceSink (source thread) ---
+  void onOdometry(const OdometrySample& odometry) override;
+  bool onScan(const slam::ScanInput& scan) override;
+
+  void mappingLoop();
+  void planningLoop();
+  Status persistUpdate(const slam::MappingUpdate& update);
+  void publishMappingState();
+  geometry::Pose3 estimatedPose() const;  // map frame
+  Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
+  // Logs and journals a mission state; the caller holds state_mutex_.
+  void recordStateLocked(mission::MissionState state);
+  void fail(const std::string& where, const Error& error);
+  std::optional<std::vector<plan::Waypoint>> pathHome(const std::shared_ptr<const map::MergedMap>& snapshot);
+
+  const VogdConfig config_;
+  const DaemonOptions options_;
+  std::filesystem::path mission_dir_;
+  SystemdNotifier notifier_;
+
+  // Components.
+  std::unique_ptr<mission::MissionStore> store_;
+  std::unique_ptr<mission::RawLog> raw_log_;          // mapping thread
+  std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
+  std::unique_ptr<map::MergeWorker> merge_;
+  std::unique_ptr<plan::NbvPlanner> planner_;         // planning thread
+  std::unique_ptr<VehicleSource> source_;
+  asio::io_context io_;
+  std::unique_ptr<api::ApiServer> api_;
+
+  // Source -> mapping queue.
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<slam::ScanInput> queue_;                 // guarded by queue_mutex_
+  std::size_t scans_unmapped_ = 0;                    // queued or being mapped, guarded by queue_mutex_
+  static constexpr std::size_t kMaxQueuedScans = 256;
+
+  // Shared state, guarded by state_mutex_.
+  mutable std::mutex state_mutex_;
+  std::condition_variable planner_cv_;
+  mission::MissionControl mission_;
+  bool mission_started_ = false;           // the planner must (re)initialise for a new start
+  bool home_path_sent_ = false;            // returning: the way home was handed to the vehicle
+  api::PlannerState planner_state_ = api::PlannerState::kIdle;
+  std::optional<geometry::Pose3> T_oldodom_newodom_;  // resume alignment, set at the first odometry sample
+  std::optional<geometry::Pose3> T_map_resume_;       // where the vehicle is taken to be at a resume
+  std::int64_t pipeline_last_stamp_ns_ = 0;           // newest mapped stamp at a resume
+  std::int64_t stamp_offset_ns_ = 0;                  // added to a restarted source's stamps
+  OdometrySample odometry_;                            // newest, aligned
+  geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
+  std::shared_ptr<const std::vector<api::SubmapInfo>> submap_infos_;
+  std::uint32_t n_closures_ = 0;
+  mutable std::shared_ptr<const api::Cloud> cloud_;   // cache for the snapshot version below
+  mutable std::uint64_t cloud_version_ = 0;
+  std::optional<Error> failure_;
+  std::uint64_t mapping_errors_ = 0;
+  geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();
+
+  // Threads and their heartbeats.
+  std::atomic<bool> stopping_{false};
+  std::atomic<std::uint64_t> mapping_beat_{0}, planning_beat_{0}, io_beat_{0};
+  std::thread io_thread_, mapping_thread_, planning_thread_;
+  std::mutex stop_mutex_;
+  std::condition_variable stop_cv_;
+  bool stop_requested_ = false;  // guarded by stop_mutex_
+};
+
+}  // namespace vog::app

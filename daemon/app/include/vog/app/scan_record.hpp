@@ -1,0 +1,23 @@
+#pragma once
+// The simulator's scans as raw-log records (daemon/mission raw_log.hpp): with `source: sim` the
+// "device" is the simulator, and what the mapping side received from it is exactly one ScanInput per
+// ping, so that is what the raw log keeps and what `vogd --replay` feeds back.
+// Payload, little-endian: [i64 stamp_ns][f64 R x 9, row-major][f64 t x 3] (T_world_vehicle_odom)
+// [f64 z roll pitch][u32 n][f32 range_m x n] (+inf = no return).
+
+#include "vog/geometry/result.hpp"
+#include "vog/slam/submap_builder.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace vog::app {
+
+inline constexpr std::uint16_t kSimScanDeviceId = 0x0100;
+
+std::vector<std::uint8_t> encodeScanRecord(const slam::ScanInput& scan);
+// Errors name the problem (short, trailing bytes, beam count, non-finite pose).
+Result<slam::ScanInput> decodeScanRecord(std::span<const std::uint8_t> bytes);
+
+}  // namespace vog::app

@@ -1,0 +1,53 @@
+#include "vog/app/replay.hpp"
+
+#include "vog/app/scan_record.hpp"
+#include "vog/map/merged_map.hpp"
+#include "vog/mission/mission_store.hpp"
+#include "vog/mission/raw_log.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
+
+namespace vog::app {
+
+Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesystem::path& mission_dir,
+                                  const std::filesystem::path& out_dir) {
+  const std::filesystem::path raw_file = mission_dir / mission::MissionStore::kRawLogFile;
+  if (!std::filesystem::exists(raw_file)) return Error{"replay: no raw log " + raw_file.string()};
+  if (std::filesystem::exists(out_dir / mission::MissionStore::kJournalFile))
+    return Error{"replay: " + out_dir.string() + " already holds a mission; give an empty or new folder"};
+  auto raw = mission::readRawLog(raw_file);
+  if (!raw) return Error{"replay: " + raw.error().message};
+  auto store = mission::MissionStore::open(out_dir, config.mapping.builder.grid);
+  if (!store) return Error{"replay: " + store.error().message};
+  auto pipeline = slam::MappingPipeline::create(config.mapping);
+  if (!pipeline) return Error{"replay: mapping: " + pipeline.error().message};
+
+  ReplayStats stats;
+  auto persist = [&](const Result<slam::MappingUpdate>& update) -> Status {
+    if (!update) {
+      ++stats.rejected_scans;  // live mapping refused the same scan and went on
+      return {};
+    }
+    return (*store)->onUpdate(**pipeline, *update);
+  };
+  for (const mission::RawRecord& record : raw->records) {
+    if (record.device_id != kSimScanDeviceId) {
+      ++stats.skipped_records;
+      continue;
+    }
+    auto scan = decodeScanRecord(record.bytes);
+    if (!scan) return Error{"replay: record at " + std::to_string(record.stamp_ns) + " ns: " + scan.error().message};
+    ++stats.scans;
+    if (auto st = persist((*pipeline)->feed(*scan)); !st) return st.error();
+  }
+  if (auto st = persist((*pipeline)->finish()); !st) return st.error();
+
+  auto merged = map::MergedMap::create(config.mapping.builder.grid);
+  if (!merged) return merged.error();
+  if (auto s = (*merged)->sync((*pipeline)->map().entries(), config.merge); !s) return s.error();
+  if (auto st = (*merged)->writeBt(out_dir / "map.bt"); !st) return st.error();
+  stats.submaps = (*pipeline)->submaps().size();
+  stats.closures = (*pipeline)->closures().size();
+  return stats;
+}
+
+}  // namespace vog::app
