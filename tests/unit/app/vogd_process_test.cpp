@@ -1,0 +1,183 @@
+// The vogd executable as systemd runs it: READY and WATCHDOG on the notify socket, kill -9 in the
+// middle of a mission followed by a restart that resumes every closed submap and keeps mapping, and
+// SIGTERM answered by STOPPING and a clean exit within 2 s.
+#include "vog/client/api_client.hpp"
+
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <thread>
+
+extern char** environ;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+// The service manager's end of NOTIFY_SOCKET.
+class NotifySocket {
+ public:
+  explicit NotifySocket(const fs::path& path) : path_(path) {
+    fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof(addr.sun_path) - 1);
+    bound_ = ::bind(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) == 0;
+  }
+  ~NotifySocket() { ::close(fd_); }
+  bool bound() const { return bound_; }
+  // Waits for a datagram containing `line` (other messages are skipped).
+  bool waitFor(const std::string& line, double timeout_s) {
+    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (Clock::now() < end) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 50) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::recv(fd_, buf, sizeof(buf), 0);
+      if (n <= 0) continue;
+      const std::string msg(buf, static_cast<std::size_t>(n));
+      if (("\n" + msg + "\n").find("\n" + line + "\n") != std::string::npos) return true;
+    }
+    return false;
+  }
+
+ private:
+  fs::path path_;
+  int fd_ = -1;
+  bool bound_ = false;
+};
+
+class VogdProcess {
+ public:
+  VogdProcess(const std::vector<std::string>& args, const std::vector<std::string>& env, const fs::path& log) {
+    std::vector<char*> argv, envp;
+    std::vector<std::string> a = args, e = env;
+    for (char** p = environ; *p != nullptr; ++p) e.emplace_back(*p);
+    for (auto& s : a) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    for (auto& s : e) envp.push_back(s.data());
+    envp.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    started_ = posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), envp.data()) == 0;
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~VogdProcess() {
+    if (started_ && !reaped_) {
+      ::kill(pid_, SIGKILL);
+      (void)wait(5.0);
+    }
+  }
+  bool started() const { return started_; }
+  pid_t pid() const { return pid_; }
+  // The exit status (or 128 + signal) within the timeout, else -1.
+  int wait(double timeout_s) {
+    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (Clock::now() < end) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        reaped_ = true;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return -1;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  bool started_ = false;
+  bool reaped_ = false;
+};
+
+std::uint16_t readPort(const fs::path& file) {
+  std::ifstream in(file);
+  int p = 0;
+  return (in >> p) ? static_cast<std::uint16_t>(p) : 0;
+}
+
+vog::api::StatusReport waitForSubmaps(vog::client::ApiClient& c, std::uint32_t n, double timeout_s) {
+  const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+  vog::api::StatusReport s;
+  while (Clock::now() < end) {
+    auto r = c.status();
+    if (!r) break;
+    s = *r;
+    if (s.n_submaps >= n) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return s;
+}
+
+std::string logText(const fs::path& log) {
+  std::ifstream in(log);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
+  vog::test::TempDir dir("vogd-process");
+  const fs::path config = dir.path() / "vogd.yaml";
+  std::ofstream(config) << "source: sim\n"
+                           "sim:\n  scene: " << (vog::test::sourceDir() / "config/scenes/pilings.yaml").string()
+                        << "\n  seed: 2\n  speedup: 0\n"
+                           "mission:\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n  start_on_launch: true\n"
+                           "  max_submaps: 60\n"
+                           "api:\n  port: 0\n";
+  const fs::path mission = dir.path() / "mission", port_file = dir.path() / "port", log = dir.path() / "vogd.log";
+  NotifySocket notify(dir.path() / "notify.sock");
+  ASSERT_TRUE(notify.bound());
+  const std::vector<std::string> args = {VOGD_EXECUTABLE, "--config", config.string(), "--mission-dir", mission.string(),
+                                         "--port-file", port_file.string()};
+  const std::vector<std::string> env = {"NOTIFY_SOCKET=" + (dir.path() / "notify.sock").string(),
+                                        "WATCHDOG_USEC=2000000"};
+
+  std::uint32_t committed = 0;
+  {
+    VogdProcess vogd(args, env, log);
+    ASSERT_TRUE(vogd.started());
+    ASSERT_TRUE(notify.waitFor("READY=1", 30.0)) << logText(log);
+    EXPECT_TRUE(notify.waitFor("WATCHDOG=1", 5.0)) << "no watchdog ping within 5 s of WatchdogSec=2s";
+    auto c = vog::client::ApiClient::connect("127.0.0.1", readPort(port_file)).value();
+    const vog::api::StatusReport s = waitForSubmaps(*c, 3, 60.0);
+    ASSERT_GE(s.n_submaps, 3u) << logText(log);
+    committed = s.n_submaps;  // the API reports a submap only after its journal group is durable
+    ::kill(vogd.pid(), SIGKILL);
+    EXPECT_EQ(vogd.wait(5.0), 128 + SIGKILL);
+  }
+  fs::remove(port_file);
+  {
+    VogdProcess vogd(args, env, log);
+    ASSERT_TRUE(notify.waitFor("READY=1", 30.0)) << logText(log);
+    auto c = vog::client::ApiClient::connect("127.0.0.1", readPort(port_file)).value();
+    const vog::api::StatusReport resumed = c->status().value();
+    EXPECT_GE(resumed.n_submaps, committed) << "a closed submap was lost in the kill";
+    EXPECT_EQ(resumed.mission_state, vog::api::MissionState::kExploring);
+    // The mission goes on from where it was: new submaps are mapped after the resume.
+    const vog::api::StatusReport later = waitForSubmaps(*c, resumed.n_submaps + 2, 60.0);
+    EXPECT_GE(later.n_submaps, resumed.n_submaps + 2) << logText(log);
+    const auto t0 = Clock::now();
+    ::kill(vogd.pid(), SIGTERM);
+    EXPECT_TRUE(notify.waitFor("STOPPING=1", 2.0));
+    EXPECT_EQ(vogd.wait(2.0), 0) << logText(log);
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 2.0);
+  }
+  EXPECT_EQ(logText(log).find("rejected"), std::string::npos) << "no scan may be refused after the resume";
+}
+
+}  // namespace
