@@ -60,4 +60,24 @@ Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3
   return out;
 }
 
+double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m) {
+  if (points.empty()) return 0.0;
+  const double res = map.resolution();
+  const int reach = static_cast<int>(std::ceil(radius_m / res));
+  std::size_t covered = 0;
+  for (const Eigen::Vector3d& p : points) {
+    const map::VoxelKey centre = map::pointToKey(p, 1.0 / res);
+    bool hit = false;
+    for (int dz = -reach; dz <= reach && !hit; ++dz)
+      for (int dy = -reach; dy <= reach && !hit; ++dy)
+        for (int dx = -reach; dx <= reach && !hit; ++dx) {
+          const map::VoxelKey k = centre + map::VoxelKey(dx, dy, dz);
+          if ((map::keyToCentre(k, res) - p).norm() > radius_m) continue;
+          hit = map.at(k).status == map::Occupancy::kOccupied;
+        }
+    if (hit) ++covered;
+  }
+  return static_cast<double>(covered) / static_cast<double>(points.size());
+}
+
 }  // namespace vog::bench

@@ -9,6 +9,7 @@
 #include "vog/geometry/pose.hpp"
 #include "vog/geometry/result.hpp"
 #include "vog/map/local_grid.hpp"
+#include "vog/map/merged_map.hpp"
 #include "vog/slam/nearest_neighbours.hpp"
 
 #include <Eigen/Core>
@@ -49,5 +50,8 @@ struct ReconstructionError {
 // Errors when the estimate is empty or the alignment ICP fails (too few points or correspondences).
 Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3d>& estimate_world,
                                                 const ReferenceReconstruction& reference);
+
+// Coverage (issue 5): the share of `points` (world frame) within `radius_m` of an occupied voxel of `map`.
+double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m);
 
 }  // namespace vog::bench

@@ -158,6 +158,18 @@ Status Daemon::init() {
     spdlog::info("mission {}: new", mission_dir_.string());
   }
 
+  auto openCsv = [&](std::ofstream& f, const char* name, const char* header) -> Status {
+    const std::filesystem::path file = mission_dir_ / name;
+    const bool fresh = !std::filesystem::exists(file);
+    f.open(file, std::ios::app);
+    if (!f) return Error{"cannot open " + file.string()};
+    if (fresh) f << header << "\n" << std::flush;
+    return {};
+  };
+  if (auto st = openCsv(plans_csv_, "iterations.csv", "iteration,sim_s,n_submaps,plan_ms,status,best_gain,tree_size,coverage"); !st)
+    return st;
+  if (auto st = openCsv(merges_csv_, "merges.csv", "sim_s,n_submaps,merge_ms,remerged"); !st) return st;
+
   auto merge = map::MergeWorker::create(grid, config_.merge);
   if (!merge) return Error{"merge: " + merge.error().message};
   merge_ = std::move(merge).value();
@@ -205,7 +217,7 @@ void Daemon::onOdometry(const OdometrySample& odometry) {
   if (T_oldodom_newodom_) odometry_.T_odom_vehicle = *T_oldodom_newodom_ * odometry.T_odom_vehicle;
 }
 
-bool Daemon::onScan(const slam::ScanInput& scan) {
+bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_world_vehicle_true) {
   slam::ScanInput aligned = scan;
   {
     const std::lock_guard lock(state_mutex_);
@@ -215,7 +227,7 @@ bool Daemon::onScan(const slam::ScanInput& scan) {
   std::unique_lock lock(queue_mutex_);
   queue_cv_.wait(lock, [&] { return queue_.size() < kMaxQueuedScans || stopping_.load(); });
   if (stopping_) return false;
-  queue_.push_back(std::move(aligned));
+  queue_.push_back({std::move(aligned), T_world_vehicle_true});
   ++scans_unmapped_;
   queue_cv_.notify_all();
   return true;
@@ -227,18 +239,23 @@ void Daemon::mappingLoop() {
   bool raw_log_failed = false;
   while (true) {
     ++mapping_beat_;
-    slam::ScanInput scan;
+    QueuedScan item;
     {
       std::unique_lock lock(queue_mutex_);
       queue_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !queue_.empty() || stopping_.load(); });
       if (stopping_) break;
       if (queue_.empty()) continue;
-      scan = std::move(queue_.front());
+      item = std::move(queue_.front());
       queue_.pop_front();
       queue_cv_.notify_all();
     }
+    const slam::ScanInput& scan = item.scan;
     if (!raw_log_failed) {
-      if (auto st = raw_log_->append(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan)); !st) {
+      Status st = raw_log_->append(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
+      if (st && item.T_world_vehicle_true)
+        st = raw_log_->append(kSimTruthDeviceId, scan.scan.stamp_ns,
+                              encodeTruthRecord({scan.scan.stamp_ns, *item.T_world_vehicle_true}));
+      if (!st) {
         spdlog::error("raw log: {} (recording stops; mapping goes on)", st.error().message);
         raw_log_failed = true;
       }
@@ -475,6 +492,9 @@ void Daemon::planningLoop() {
     }
     spdlog::debug("planner: {} in {:.1f} ms, tree {}, gain {:.1f}", plan::toString(result->status), ms,
                   result->tree_size, result->best_gain);
+    plans_csv_ << plan_iteration_++ << ',' << 1e-9 * static_cast<double>(stamp) << ',' << n_submaps << ',' << ms << ','
+               << plan::toString(result->status) << ',' << result->best_gain << ',' << result->tree_size << ",\n"
+               << std::flush;
     if (result->status == plan::PlanStatus::kNoPath) {
       spdlog::warn("planner: no path: {}", result->reason);
       (void)source_->setWaypoints({});
@@ -605,6 +625,11 @@ Status Daemon::run() {
     }
     if (auto st = source_->failure(); !st) fail("source", st.error());
     if (auto e = merge_->error()) fail("merge", *e);
+    for (const map::MergeRecord& m : merge_->takeRecords()) {
+      const std::lock_guard lock(state_mutex_);
+      merges_csv_ << 1e-9 * static_cast<double>(odometry_.stamp_ns) << ',' << m.n_submaps << ',' << m.merge_ms << ','
+                  << m.stats.remerged << '\n' << std::flush;
+    }
     if (now - last_pose >= std::chrono::milliseconds(200)) {
       api::PoseUpdate p;
       {

@@ -30,6 +30,7 @@ Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesyste
     return (*store)->onUpdate(**pipeline, *update);
   };
   for (const mission::RawRecord& record : raw->records) {
+    if (record.device_id == kSimTruthDeviceId) continue;  // evaluation records, not inputs
     if (record.device_id != kSimScanDeviceId) {
       ++stats.skipped_records;
       continue;

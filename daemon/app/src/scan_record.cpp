@@ -18,6 +18,26 @@ void putF64(std::vector<std::uint8_t>& out, double v) {
   codec::writeU64LE(out, at, std::bit_cast<std::uint64_t>(v));
 }
 
+// The rotation matrix itself, not a quaternion: a replay must see bit-identical input.
+void putPose(std::vector<std::uint8_t>& out, const geometry::Pose3& T) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) putF64(out, T.linear()(r, c));
+  for (int i = 0; i < 3; ++i) putF64(out, T.translation()[i]);
+}
+
+// Reads 12 values at `at` into a rigid pose.
+Result<geometry::Pose3> getPose(std::span<const std::uint8_t> bytes, std::size_t at, const char* what) {
+  geometry::Pose3 T = geometry::Pose3::Identity();
+  for (std::size_t i = 0; i < 12; ++i) {
+    const double v = codec::readF64LE(bytes, at + 8 * i);
+    if (!std::isfinite(v)) return Error{std::string(what) + ": pose value " + std::to_string(i) + " is not finite"};
+    if (i < 9) T.linear()(static_cast<int>(i / 3), static_cast<int>(i % 3)) = v;
+    else T.translation()[static_cast<int>(i - 9)] = v;
+  }
+  if (!geometry::isValidPose(T)) return Error{std::string(what) + ": the pose is not a rigid transform"};
+  return T;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encodeScanRecord(const slam::ScanInput& scan) {
@@ -25,11 +45,7 @@ std::vector<std::uint8_t> encodeScanRecord(const slam::ScanInput& scan) {
   out.reserve(kHeaderBytes + 4 * scan.scan.range_m.size());
   out.resize(8);
   codec::writeU64LE(out, 0, static_cast<std::uint64_t>(scan.scan.stamp_ns));
-  // The rotation matrix itself, not a quaternion: a replay must see bit-identical input.
-  const Eigen::Matrix3d R = scan.T_world_vehicle_odom.linear();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) putF64(out, R(r, c));
-  for (int i = 0; i < 3; ++i) putF64(out, scan.T_world_vehicle_odom.translation()[i]);
+  putPose(out, scan.T_world_vehicle_odom);
   for (int i = 0; i < 3; ++i) putF64(out, scan.z_roll_pitch[i]);
   const std::size_t at = out.size();
   out.resize(at + 4 + 4 * scan.scan.range_m.size());
@@ -44,17 +60,13 @@ Result<slam::ScanInput> decodeScanRecord(std::span<const std::uint8_t> bytes) {
                  std::to_string(kHeaderBytes) + "-byte header"};
   slam::ScanInput in;
   in.scan.stamp_ns = codec::readI64LE(bytes, 0);
-  double v[kPoseValues];
-  for (std::size_t i = 0; i < kPoseValues; ++i) {
-    v[i] = codec::readF64LE(bytes, 8 + 8 * i);
-    if (!std::isfinite(v[i])) return Error{"scan record: pose value " + std::to_string(i) + " is not finite"};
+  auto T = getPose(bytes, 8, "scan record");
+  if (!T) return T.error();
+  in.T_world_vehicle_odom = *T;
+  for (std::size_t i = 0; i < 3; ++i) {
+    in.z_roll_pitch[static_cast<int>(i)] = codec::readF64LE(bytes, 8 + 8 * (12 + i));
+    if (!std::isfinite(in.z_roll_pitch[static_cast<int>(i)])) return Error{"scan record: z/roll/pitch is not finite"};
   }
-  in.T_world_vehicle_odom = geometry::Pose3::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) in.T_world_vehicle_odom.linear()(r, c) = v[3 * r + c];
-  in.T_world_vehicle_odom.translation() = Eigen::Vector3d(v[9], v[10], v[11]);
-  if (!geometry::isValidPose(in.T_world_vehicle_odom)) return Error{"scan record: the pose is not a rigid transform"};
-  in.z_roll_pitch = Eigen::Vector3d(v[12], v[13], v[14]);
   const std::uint32_t n = codec::readU32LE(bytes, kHeaderBytes - 4);
   if (n > kMaxBeams) return Error{"scan record: " + std::to_string(n) + " beams, at most " + std::to_string(kMaxBeams)};
   if (bytes.size() != kHeaderBytes + 4 * static_cast<std::size_t>(n))
@@ -63,6 +75,24 @@ Result<slam::ScanInput> decodeScanRecord(std::span<const std::uint8_t> bytes) {
   in.scan.range_m.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) in.scan.range_m[i] = codec::readF32LE(bytes, kHeaderBytes + 4 * i);
   return in;
+}
+
+std::vector<std::uint8_t> encodeTruthRecord(const TruthRecord& truth) {
+  std::vector<std::uint8_t> out(8);
+  codec::writeU64LE(out, 0, static_cast<std::uint64_t>(truth.stamp_ns));
+  putPose(out, truth.T_world_vehicle);
+  return out;
+}
+
+Result<TruthRecord> decodeTruthRecord(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() != 8 + 12 * 8)
+    return Error{"truth record: " + std::to_string(bytes.size()) + " bytes, want " + std::to_string(8 + 12 * 8)};
+  TruthRecord t;
+  t.stamp_ns = codec::readI64LE(bytes, 0);
+  auto T = getPose(bytes, 8, "truth record");
+  if (!T) return T.error();
+  t.T_world_vehicle = *T;
+  return t;
 }
 
 }  // namespace vog::app

@@ -18,20 +18,20 @@ class StepCollector final : public sim::SimulationSink {
     T_odom_now = T_odom;
     stamp_ns = state.stamp_ns;
   }
-  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const geometry::Pose3& /*T_true*/,
+  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const geometry::Pose3& T_true_scan,
             const geometry::Pose3& T_odom) override {
     slam::ScanInput in;
     in.T_world_vehicle_odom = T_odom;
     const Eigen::Vector3d rpy = geometry::rpyFromRotation(T_odom.linear());
     in.z_roll_pitch = Eigen::Vector3d(T_odom.translation().z(), rpy.x(), rpy.y());
     in.scan = ping.scan;
-    scans.push_back(std::move(in));
+    scans.emplace_back(std::move(in), T_true_scan);
   }
 
   geometry::Pose3 T_true = geometry::Pose3::Identity();
   geometry::Pose3 T_odom_now = geometry::Pose3::Identity();
   std::int64_t stamp_ns = 0;
-  std::vector<slam::ScanInput> scans;
+  std::vector<std::pair<slam::ScanInput, geometry::Pose3>> scans;  // with the true pose
 };
 
 }  // namespace
@@ -147,8 +147,8 @@ void SimSource::run(SourceSink& sink) {
     o.sigma_yaw_rad = std::sqrt(s2yaw * t);
     sink.onOdometry(o);
     stamp_ns_ = step_samples.stamp_ns;
-    for (slam::ScanInput& s : step_samples.scans) {
-      if (!sink.onScan(s)) return false;
+    for (const auto& [scan, T_true] : step_samples.scans) {
+      if (!sink.onScan(scan, T_true)) return false;
       ++scans_;
     }
     step_samples.scans.clear();

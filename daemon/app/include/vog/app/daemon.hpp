@@ -18,6 +18,9 @@
 // odometry sample: the vehicle is taken to be at the last waypoint sent (where its controller held it)
 // or, without one, at the newest submap's base.
 //
+// Telemetry: iterations.csv (one row per planning iteration) and merges.csv (one row per merge) in
+// the mission folder, the columns of `vog-bench mission --out` so scripts/plot-mission draws them.
+//
 // Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
 // until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
 // submap closed and stored, merge, API) and returns.
@@ -40,6 +43,7 @@
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -78,7 +82,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   // --- SourceSink (source thread) ---
   void onOdometry(const OdometrySample& odometry) override;
-  bool onScan(const slam::ScanInput& scan) override;
+  bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) override;
 
   void mappingLoop();
   void planningLoop();
@@ -109,7 +113,11 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   // Source -> mapping queue.
   std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
-  std::deque<slam::ScanInput> queue_;                 // guarded by queue_mutex_
+  struct QueuedScan {
+    slam::ScanInput scan;
+    std::optional<geometry::Pose3> T_world_vehicle_true;  // simulator only, recorded for evaluation
+  };
+  std::deque<QueuedScan> queue_;                      // guarded by queue_mutex_
   std::size_t scans_unmapped_ = 0;                    // queued or being mapped, guarded by queue_mutex_
   static constexpr std::size_t kMaxQueuedScans = 256;
 
@@ -133,6 +141,12 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::optional<Error> failure_;
   std::uint64_t mapping_errors_ = 0;
   geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();
+
+  // Telemetry next to the mission (mission_dir/iterations.csv, merges.csv): one row per planning
+  // iteration (planning thread) and per merge (main thread).
+  std::ofstream plans_csv_;
+  std::ofstream merges_csv_;
+  int plan_iteration_ = 0;
 
   // Threads and their heartbeats.
   std::atomic<bool> stopping_{false};

@@ -15,9 +15,18 @@
 namespace vog::app {
 
 inline constexpr std::uint16_t kSimScanDeviceId = 0x0100;
+// The true vehicle pose of the scan with the same stamp (evaluation only): [i64 stamp_ns][f64 R x 9][f64 t x 3].
+inline constexpr std::uint16_t kSimTruthDeviceId = 0x0101;
 
 std::vector<std::uint8_t> encodeScanRecord(const slam::ScanInput& scan);
 // Errors name the problem (short, trailing bytes, beam count, non-finite pose).
 Result<slam::ScanInput> decodeScanRecord(std::span<const std::uint8_t> bytes);
+
+struct TruthRecord {
+  std::int64_t stamp_ns = 0;
+  geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();
+};
+std::vector<std::uint8_t> encodeTruthRecord(const TruthRecord& truth);
+Result<TruthRecord> decodeTruthRecord(std::span<const std::uint8_t> bytes);
 
 }  // namespace vog::app

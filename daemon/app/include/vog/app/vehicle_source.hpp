@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace vog::app {
@@ -25,12 +26,13 @@ struct OdometrySample {
 };
 
 // Receives what a source produces, on the source's thread. onScan() may block while the mapping
-// side is behind (back-pressure); it returns false when the daemon is stopping.
+// side is behind (back-pressure); it returns false when the daemon is stopping. A simulated source
+// also gives the true vehicle pose of each scan; it is recorded for evaluation, never used to map.
 class SourceSink {
  public:
   virtual ~SourceSink() = default;
   virtual void onOdometry(const OdometrySample& odometry) = 0;
-  virtual bool onScan(const slam::ScanInput& scan) = 0;
+  virtual bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) = 0;
 };
 
 struct SourceWaypoint {

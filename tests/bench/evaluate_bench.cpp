@@ -1,0 +1,209 @@
+// vog-bench evaluate: scores a mission that vogd ran on the built-in simulator against the simulator's
+// ground truth, with the figures of `vog-bench mission` (issue 5): coverage of the observable surface,
+// reconstruction RMSE (occupied voxels of the final map against the same scans at their true poses,
+// after a rigid alignment and without), path length, submaps, loop closures, and the planning and merge
+// times vogd recorded. Reads only the mission folder (journal, submaps, raw log with the truth records,
+// iterations.csv, merges.csv) and the configuration it ran with; with --out it writes the CSVs that
+// scripts/plot-mission draws (coverage filled in every 10 submaps, with the final poses).
+#include "bench_registry.hpp"
+#include "reconstruction_eval.hpp"
+
+#include "vog/app/scan_record.hpp"
+#include "vog/app/vogd_config.hpp"
+#include "vog/map/merged_map.hpp"
+#include "vog/mission/mission_store.hpp"
+#include "vog/mission/raw_log.hpp"
+#include "vog/sim/scene.hpp"
+#include "vog/sim/world.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+using vog::geometry::Pose3;
+
+std::vector<std::vector<std::string>> readCsv(const fs::path& file) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    rows.push_back(std::move(cells));
+  }
+  return rows;
+}
+
+}  // namespace
+
+VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against ground truth (coverage, RMSE, times)") {
+  std::string config_file, mission_dir, out_dir;
+  bool json = false;
+  CLI::App app{"vog-bench evaluate"};
+  app.add_option("--config", config_file, "the vogd configuration the mission ran with (source: sim)")->required();
+  app.add_option("--mission", mission_dir, "the mission folder")->required();
+  app.add_option("--out", out_dir, "write iterations.csv, merges.csv, path.csv, map_points.csv for scripts/plot-mission");
+  app.add_flag("--json", json, "print JSON (the only output format)");
+  try {
+    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  auto fail = [](const std::string& message) {
+    std::cerr << "evaluate: " << message << "\n";
+    return 1;
+  };
+  auto config = vog::app::loadVogdConfig(config_file);
+  if (!config) return fail(config.error().message);
+  if (config->source != vog::app::Source::kSim) return fail("the mission must have run on the simulator (source: sim)");
+  if (!fs::exists(fs::path(mission_dir) / vog::mission::MissionStore::kJournalFile))
+    return fail(mission_dir + " holds no mission journal");
+  const vog::map::GridConfig& grid = config->mapping.builder.grid;
+  const vog::geometry::SonarFan& fan = config->mapping.builder.fan;
+
+  // The final map: every committed submap at its final estimate.
+  vog::mission::MissionResume resume;
+  auto store = vog::mission::MissionStore::open(mission_dir, grid, &resume);
+  if (!store) return fail(store.error().message);
+  auto pipeline = vog::slam::MappingPipeline::restore(config->mapping, resume.pipeline);
+  if (!pipeline) return fail(pipeline.error().message);
+  const auto entries = (*pipeline)->map().entries();
+  const auto& records = (*pipeline)->submaps();
+
+  // Ground truth: the raw log's scans at their true poses; the estimated path from the same scans.
+  auto raw = vog::mission::readRawLog(fs::path(mission_dir) / vog::mission::MissionStore::kRawLogFile);
+  if (!raw) return fail(raw.error().message);
+  std::map<std::int64_t, Pose3> truth;
+  std::vector<vog::slam::ScanInput> scans;
+  for (const vog::mission::RawRecord& r : raw->records) {
+    if (r.device_id == vog::app::kSimTruthDeviceId) {
+      auto t = vog::app::decodeTruthRecord(r.bytes);
+      if (!t) return fail(t.error().message);
+      truth[t->stamp_ns] = t->T_world_vehicle;
+    } else if (r.device_id == vog::app::kSimScanDeviceId) {
+      auto s = vog::app::decodeScanRecord(r.bytes);
+      if (!s) return fail(s.error().message);
+      scans.push_back(std::move(s).value());
+    }
+  }
+  if (truth.empty()) return fail("the raw log holds no truth records");
+  auto truth_r = vog::map::LocalGrid::create(grid);
+  if (!truth_r) return fail(truth_r.error().message);
+  vog::map::LocalGrid& truth_grid = **truth_r;
+  std::vector<std::pair<Pose3, Pose3>> path;  // (true, estimated), once per second
+  std::int64_t next_sample_ns = 0;
+  std::size_t submap = 0;
+  double path_m = 0.0;
+  std::optional<Eigen::Vector3d> last_true;
+  for (const vog::slam::ScanInput& s : scans) {
+    const auto t = truth.find(s.scan.stamp_ns);
+    if (t == truth.end()) continue;
+    if (auto st = truth_grid.insertScan(t->second * fan.T_vehicle_sensor, fan, s.scan); !st) return fail(st.error().message);
+    if (last_true) path_m += (t->second.translation() - *last_true).norm();
+    last_true = t->second.translation();
+    while (submap + 1 < records.size() && s.scan.stamp_ns > records[submap].last_stamp_ns) ++submap;
+    if (!records.empty() && s.scan.stamp_ns >= next_sample_ns) {
+      const vog::slam::SubmapRecord& r = records[submap];
+      path.emplace_back(t->second, r.T_world_base * r.T_world_base_odom.inverse() * s.T_world_vehicle_odom);
+      next_sample_ns = s.scan.stamp_ns + 1'000'000'000;
+    }
+  }
+  truth_grid.finalize();
+  const vog::bench::ReferenceReconstruction reference(truth_grid);
+  std::vector<Eigen::Vector3d> estimate;
+  for (const vog::map::SubmapEntry& e : entries) vog::bench::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
+  auto error = vog::bench::reconstructionError(estimate, reference);
+  if (!error) return fail(error.error().message);
+
+  // Coverage of the observable surface, aligned as the RMSE, after every 10th submap and at the end.
+  auto scene = vog::sim::loadScene(config->sim.scene);
+  if (!scene) return fail(scene.error().message);
+  auto world = vog::sim::World::create(*scene);
+  if (!world) return fail(world.error().message);
+  auto observable = vog::sim::observablePoints(**world, (*world)->sampleSurface(0.1, config->sim.seed), {});
+  if (!observable) return fail(observable.error().message);
+  std::vector<Eigen::Vector3d> observable_in_map;
+  for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(error->T_reference_estimate.inverse() * p);
+  auto merged = vog::map::MergedMap::create(grid);
+  if (!merged) return fail(merged.error().message);
+  std::map<std::size_t, double> coverage_at;  // n_submaps -> coverage
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (auto st = (*merged)->add(entries[i]); !st) return fail(st.error().message);
+    if ((i + 1) % 10 == 0 || i + 1 == entries.size())
+      coverage_at[i + 1] = vog::bench::coverageOf(**merged, observable_in_map, 2 * grid.resolution_m);
+  }
+  const double coverage = coverage_at.empty() ? 0.0 : coverage_at.rbegin()->second;
+  const double coverage_unaligned = vog::bench::coverageOf(**merged, observable->points.points, 2 * grid.resolution_m);
+
+  // vogd's own telemetry.
+  auto iterations = readCsv(fs::path(mission_dir) / "iterations.csv");
+  auto merges = readCsv(fs::path(mission_dir) / "merges.csv");
+  std::vector<double> plan_ms, merge_ms;
+  for (std::size_t i = 1; i < iterations.size(); ++i)
+    if (iterations[i].size() >= 4) plan_ms.push_back(std::stod(iterations[i][3]));
+  for (std::size_t i = 1; i < merges.size(); ++i)
+    if (merges[i].size() >= 3) merge_ms.push_back(std::stod(merges[i][2]));
+
+  if (!out_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    if (ec) return fail("cannot create " + out_dir + ": " + ec.message());
+    std::ofstream it(fs::path(out_dir) / "iterations.csv");
+    std::size_t filled_up_to = 0;
+    for (std::size_t i = 0; i < iterations.size(); ++i) {
+      std::vector<std::string> row = iterations[i];
+      if (i > 0 && row.size() >= 8) {
+        const std::size_t n = static_cast<std::size_t>(std::stoul(row[2]));
+        // The coverage of the first n submaps, on the first row that had them.
+        for (const auto& [k, c] : coverage_at)
+          if (k <= n && k > filled_up_to) {
+            row[7] = std::to_string(c);
+            filled_up_to = k;
+          }
+      }
+      for (std::size_t c = 0; c < row.size(); ++c) it << (c ? "," : "") << row[c];
+      it << '\n';
+    }
+    fs::copy_file(fs::path(mission_dir) / "merges.csv", fs::path(out_dir) / "merges.csv", fs::copy_options::overwrite_existing, ec);
+    std::ofstream pa(fs::path(out_dir) / "path.csv");
+    pa << "true_x_m,true_y_m,true_z_m,est_x_m,est_y_m,est_z_m\n";
+    for (const auto& [T_true, T_est] : path) {
+      const Eigen::Vector3d a = T_true.translation(), b = T_est.translation();
+      pa << a.x() << ',' << a.y() << ',' << a.z() << ',' << b.x() << ',' << b.y() << ',' << b.z() << '\n';
+    }
+    std::ofstream mp(fs::path(out_dir) / "map_points.csv");
+    mp << "x_m,y_m,z_m\n";
+    for (const Eigen::Vector3d& p : estimate) mp << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+    if (ec || !it || !pa || !mp) return fail("error while writing the CSV files in " + out_dir);
+  }
+
+  vog::bench::JsonObject out;
+  out.add("scene", scene->name);
+  out.add("coverage", coverage);
+  out.add("coverage_unaligned", coverage_unaligned);
+  out.add("rmse", error->rmse_m);
+  out.add("rmse_unaligned", error->rmse_unaligned_m);
+  out.add("path_m", path_m);
+  out.add("n_submaps", static_cast<std::int64_t>(entries.size()));
+  out.add("closures", static_cast<std::int64_t>((*pipeline)->closures().size()));
+  out.add("sim_s", 1e-9 * static_cast<double>(scans.empty() ? 0 : scans.back().scan.stamp_ns - scans.front().scan.stamp_ns));
+  out.add("plan_iterations", static_cast<std::int64_t>(plan_ms.size()));
+  out.add("plan_ms_p50", plan_ms.empty() ? 0.0 : vog::bench::median(plan_ms));
+  out.add("plan_ms_p95", plan_ms.empty() ? 0.0 : vog::bench::percentile(plan_ms, 0.95));
+  out.add("plan_ms_max", plan_ms.empty() ? 0.0 : vog::bench::percentile(plan_ms, 1.0));
+  out.add("merge_ms_p95", merge_ms.empty() ? 0.0 : vog::bench::percentile(merge_ms, 0.95));
+  out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
+  std::cout << out.str();
+  return 0;
+}
