@@ -3,25 +3,21 @@
 // SIGTERM answered by STOPPING and a clean exit within 2 s.
 #include "vog/client/api_client.hpp"
 
+#include "subprocess.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
-#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
 #include <sys/un.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstring>
 #include <fstream>
 #include <thread>
-
-extern char** environ;
 
 namespace {
 
@@ -61,51 +57,6 @@ class NotifySocket {
   bool bound_ = false;
 };
 
-class VogdProcess {
- public:
-  VogdProcess(const std::vector<std::string>& args, const std::vector<std::string>& env, const fs::path& log) {
-    std::vector<char*> argv, envp;
-    std::vector<std::string> a = args, e = env;
-    for (char** p = environ; *p != nullptr; ++p) e.emplace_back(*p);
-    for (auto& s : a) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    for (auto& s : e) envp.push_back(s.data());
-    envp.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    started_ = posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), envp.data()) == 0;
-    posix_spawn_file_actions_destroy(&fa);
-  }
-  ~VogdProcess() {
-    if (started_ && !reaped_) {
-      ::kill(pid_, SIGKILL);
-      (void)wait(5.0);
-    }
-  }
-  bool started() const { return started_; }
-  pid_t pid() const { return pid_; }
-  // The exit status (or 128 + signal) within the timeout, else -1.
-  int wait(double timeout_s) {
-    const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < end) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        reaped_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool started_ = false;
-  bool reaped_ = false;
-};
-
 std::uint16_t readPort(const fs::path& file) {
   std::ifstream in(file);
   int p = 0;
@@ -125,10 +76,7 @@ vog::api::StatusReport waitForSubmaps(vog::client::ApiClient& c, std::uint32_t n
   return s;
 }
 
-std::string logText(const fs::path& log) {
-  std::ifstream in(log);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+std::string logText(const fs::path& log) { return vog::test::readTextFile(log); }
 
 TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
   vog::test::TempDir dir("vogd-process");
@@ -149,7 +97,7 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
 
   std::uint32_t committed = 0;
   {
-    VogdProcess vogd(args, env, log);
+    vog::test::Subprocess vogd(args, env, log);
     ASSERT_TRUE(vogd.started());
     ASSERT_TRUE(notify.waitFor("READY=1", 30.0)) << logText(log);
     EXPECT_TRUE(notify.waitFor("WATCHDOG=1", 5.0)) << "no watchdog ping within 5 s of WatchdogSec=2s";
@@ -162,7 +110,7 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
   }
   fs::remove(port_file);
   {
-    VogdProcess vogd(args, env, log);
+    vog::test::Subprocess vogd(args, env, log);
     ASSERT_TRUE(notify.waitFor("READY=1", 30.0)) << logText(log);
     auto c = vog::client::ApiClient::connect("127.0.0.1", readPort(port_file)).value();
     const vog::api::StatusReport resumed = c->status().value();
