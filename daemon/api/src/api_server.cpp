@@ -53,7 +53,10 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   tcp::acceptor acceptor;
   bool stopped = false;                                             // io thread only
   std::uint64_t next_session_id = 1;                                // io thread only
-  std::unordered_map<std::uint64_t, std::shared_ptr<Session>> sessions;  // io thread only
+  // Open sessions, for broadcasts. A session is owned by its pending asynchronous operations (each
+  // handler holds a shared_ptr), never by this map: a session holds the Core, so owning it here
+  // would be a cycle that outlives an io_context stopped with sessions open.
+  std::unordered_map<std::uint64_t, std::weak_ptr<Session>> sessions;  // io thread only
 
   std::atomic<std::uint64_t> waypoint_seq{0};
   std::atomic<std::uint64_t> pose_seq{0};
@@ -85,6 +88,10 @@ class Session : public std::enable_shared_from_this<Session> {
     const auto ep = socket_.remote_endpoint(ec);
     state_.peer = ec ? std::string("unknown peer") : ep.address().to_string() + ":" + std::to_string(ep.port());
   }
+
+  // Destroyed without closeNow() only when the io_context is destroyed with this session's
+  // operations pending: leave the server's books right.
+  ~Session() { forget(); }
 
   bool refused() const { return refused_; }
   const std::string& peer() const { return state_.peer; }
@@ -139,8 +146,7 @@ class Session : public std::enable_shared_from_this<Session> {
     close_timer_.cancel();
     socket_.shutdown(tcp::socket::shutdown_both, ec);
     socket_.close(ec);
-    core_->sessions.erase(id_);
-    if (!refused_) --core_->n_clients;
+    forget();
   }
 
  private:
@@ -181,6 +187,13 @@ class Session : public std::enable_shared_from_this<Session> {
     if (closed_) return;
     read();
     pump();
+  }
+
+  void forget() {
+    if (forgotten_) return;
+    forgotten_ = true;
+    core_->sessions.erase(id_);
+    if (!refused_) --core_->n_clients;
   }
 
   std::size_t inFlight() const { return responses_.size() + transfers_.size(); }
@@ -337,6 +350,7 @@ class Session : public std::enable_shared_from_this<Session> {
   bool writing_ = false;
   bool closing_ = false;
   bool closed_ = false;
+  bool forgotten_ = false;  // removed from Core::sessions and the client count
   double tokens_;
   Clock::time_point last_refill_;
   std::deque<std::string> responses_;  // encoded frames, never dropped
@@ -353,7 +367,9 @@ class Session : public std::enable_shared_from_this<Session> {
 
 std::size_t ApiServer::Core::activeClients() const {
   std::size_t n = 0;
-  for (const auto& [id, s] : sessions) n += s->refused() ? 0 : 1;
+  for (const auto& [id, weak] : sessions) {
+    if (const auto s = weak.lock()) n += s->refused() ? 0 : 1;
+  }
   return n;
 }
 
@@ -391,7 +407,9 @@ void ApiServer::Core::accept() {
 std::vector<std::shared_ptr<Session>> ApiServer::Core::sessionList() const {
   std::vector<std::shared_ptr<Session>> all;
   all.reserve(sessions.size());
-  for (const auto& [id, s] : sessions) all.push_back(s);
+  for (const auto& [id, weak] : sessions) {
+    if (auto s = weak.lock()) all.push_back(std::move(s));
+  }
   return all;
 }
 
@@ -471,6 +489,8 @@ void ApiServer::publishWaypoint(const Waypoint& waypoint) {
   Waypoint w = waypoint;
   w.seq = ++core_->waypoint_seq;
   w.dropped = 0;
+  w.published_unix_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   ++core_->n_waypoints;
   asio::post(core_->io, [core = core_, w] {
     for (auto& s : core->sessionList()) s->pushWaypoint(w);

@@ -5,6 +5,7 @@
 #include "vog/map/voxel_key.hpp"
 
 #include <asio/executor_work_guard.hpp>
+#include <asio/post.hpp>
 #include <asio/signal_set.hpp>
 #include <asio/steady_timer.hpp>
 #include <spdlog/spdlog.h>
@@ -659,9 +660,9 @@ Status Daemon::run() {
   if (planning_thread_.joinable()) planning_thread_.join();
   if (mapping_thread_.joinable()) mapping_thread_.join();
   merge_->stop();
-  api_->stop();
+  api_->stop();  // posts the closing of every session; the io thread stops after it ran
   work.reset();
-  io_.stop();
+  asio::post(io_, [this] { io_.stop(); });
   if (io_thread_.joinable()) io_thread_.join();
   spdlog::info("stopped in {} ms", std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count());
   const std::lock_guard lock(state_mutex_);
