@@ -1,19 +1,32 @@
 // vog-bench mission: autonomous exploration in closed loop (thesis 4.4-4.5), in lockstep simulated time.
-// The simulator drives the vehicle and its sensors; every sonar scan goes to the mapping side, the map
-// is merged after every change, and whenever the vehicle reaches its waypoint the next-best-view
-// planner chooses the next one on the newest map snapshot. Modes (thesis Table 4.3):
+// The simulator drives the vehicle and its sensors; every sonar scan goes to the mapping side, and
+// after every map change the submap set goes to the merge thread (MergeWorker, thesis 4.5.5); whenever
+// the vehicle reaches its waypoint the next-best-view planner chooses the next one on the newest
+// published snapshot. Lockstep determinism: the bench waits for the merge thread (waitIdle) only at
+// fixed points of simulated time: right before the next submission, right before each planning call
+// and before the final evaluation. So the snapshot the planner sees depends only on the seed, while
+// merging overlaps with simulation and mapping in between (merge_wait_ms_p95 says how long the
+// planning side still waited). Modes (thesis Table 4.3):
 //   baseline  one global OcTree built at raw odometry, Bircher-style planner (unconstrained sampling,
 //             gain at the end point of an edge only);
 //   vog       VOG-Map of submaps at raw odometry, the sonar planner (constrained sampling, gain swept
 //             along each edge), no loop closures;
 //   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges).
+// All three use the planner's global search (PlannerConfig::global_search) so that "complete" means
+// the same in every mode; --global-search 0 gives Bircher's local rule. Its map update (a finalized
+// copy of the global tree per planning call) is the baseline's "merge".
 // The planner works in the estimated (map) frame; a waypoint reaches the simulated vehicle through the
 // current navigation error, as a real controller steering on its own estimate would follow it.
-// Outputs one JSON object, and with --out the per-iteration CSVs that scripts/plot-mission draws.
+// Outputs one JSON object, and with --out the per-iteration CSVs that scripts/plot-mission draws, plus
+// collisions.csv (every refused move: true and estimated pose, the map's and the scene's clearance)
+// and coverage_points.csv (the observable points and whether the final map covers them).
+// Timing fields (wall_s, realtime_factor, cpu_s, *_ms_*) vary from run to run; all others depend only
+// on the seed.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
 #include "bench_registry.hpp"
 #include "reconstruction_eval.hpp"
 
+#include "vog/map/merge_worker.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/map/voxel_key.hpp"
 #include "vog/plan/nbv_planner.hpp"
@@ -25,8 +38,10 @@
 #include <CLI/CLI.hpp>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -77,13 +92,17 @@ Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
   return vog::geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
 }
 
-// Share of `points` (world frame) within `radius` of an occupied voxel of `snapshot`.
-double coverageOf(const map::MergedMap& snapshot, const std::vector<Eigen::Vector3d>& points, double radius_m) {
+// Share of `points` (world frame) within `radius` of an occupied voxel of `snapshot`; `flags`, when
+// given, receives one covered flag per point.
+double coverageOf(const map::MergedMap& snapshot, const std::vector<Eigen::Vector3d>& points, double radius_m,
+                  std::vector<bool>* flags = nullptr) {
+  if (flags != nullptr) flags->assign(points.size(), false);
   if (points.empty()) return 0.0;
   const double res = snapshot.resolution();
   const int reach = static_cast<int>(std::ceil(radius_m / res));
   std::size_t covered = 0;
-  for (const Eigen::Vector3d& p : points) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const map::VoxelKey centre = map::pointToKey(p, 1.0 / res);
     bool hit = false;
     for (int dz = -reach; dz <= reach && !hit; ++dz)
@@ -94,8 +113,23 @@ double coverageOf(const map::MergedMap& snapshot, const std::vector<Eigen::Vecto
           hit = snapshot.at(k).status == map::Occupancy::kOccupied;
         }
     if (hit) ++covered;
+    if (flags != nullptr) (*flags)[i] = hit;
   }
   return static_cast<double>(covered) / static_cast<double>(points.size());
+}
+
+// CPU time of the calling thread, s (the planner's own work, not the wait for a shared core).
+double threadCpuS() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// CPU time of the whole process (all threads), s.
+double processCpuS() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 struct IterationRow {
@@ -107,7 +141,41 @@ struct IterationRow {
   double best_gain = 0.0;
   int tree_size = 0;
   double coverage = -1.0;  // computed every few iterations only
+  double root_shift_m = 0.0;  // distance from the estimate to the tree's root (snapped to a safe voxel)
+  bool global_goal = false;   // the planner's global search chose the goal
+  int global_candidates = 0;
 };
+
+// A refused move: where the vehicle was and what the planner believed.
+struct CollisionRow {
+  double sim_s = 0.0;
+  Pose3 T_true;
+  Pose3 T_estimated;
+  int plan_iteration = -1;  // the plan whose waypoints were being followed
+  std::size_t closures = 0;
+  bool estimate_safe = false;  // the estimate is a safe voxel of the planner's last grid
+  // Nearest occupied voxel centre to the estimate in the planner's last map (map frame), and nearest
+  // surface point to the true position (world): a map that agreed with the estimate would give about
+  // the same clearance.
+  double map_clearance_m = 0.0;
+  double true_clearance_m = 0.0;
+};
+
+// Distance from p to the nearest occupied voxel centre of `snapshot` within reach_m (reach_m if none).
+double nearestOccupiedM(const map::MergedMap& snapshot, const Eigen::Vector3d& p, double reach_m) {
+  const double res = snapshot.resolution();
+  const int n = static_cast<int>(std::ceil(reach_m / res));
+  const map::VoxelKey c = map::pointToKey(p, 1.0 / res);
+  double best = reach_m;
+  for (int dz = -n; dz <= n; ++dz)
+    for (int dy = -n; dy <= n; ++dy)
+      for (int dx = -n; dx <= n; ++dx) {
+        const map::VoxelKey k = c + map::VoxelKey(dx, dy, dz);
+        const double d = (map::keyToCentre(k, res) - p).norm();
+        if (d < best && snapshot.at(k).status == map::Occupancy::kOccupied) best = d;
+      }
+  return best;
+}
 
 struct MergeRow {
   double sim_s = 0.0;
@@ -127,6 +195,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   int coverage_every = 10;
   std::string out_dir;
   bool json = false;
+  bool global_search = true;
+  bool root_first = true;
   CLI::App app{"vog-bench mission"};
   app.add_option("--scene", scene_file, "scene YAML file");
   app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
@@ -136,6 +206,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--coverage-every", coverage_every, "compute coverage every n planning iterations")
       ->check(CLI::Range(1, 100000));
   app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
+  app.add_option("--global-search", global_search, "planner's global search when the local tree finds no gain (1/0)");
+  app.add_option("--root-first", root_first,
+                 "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
+                 "the fix, to reproduce the collisions it caused");
   app.add_flag("--json", json, "print JSON (the only output format)");
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
@@ -166,6 +240,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
 
   // Ground truth for coverage: surface points observable from a collision-free position in the box.
   sim::ObservableConfig oc;
+  const vog::geometry::PointCloud surface = world.sampleSurface(0.05, seed);
   auto observable = sim::observablePoints(world, world.sampleSurface(0.1, seed), oc);
   if (!observable) return fail(observable.error().message);
 
@@ -190,9 +265,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   slam::MappingPipeline& pipeline = **pipeline_r;
   const map::GridConfig& grid_config = mc.builder.grid;
   const vog::geometry::SonarFan& fan = mc.builder.fan;
-  auto merged_r = map::MergedMap::create(grid_config);
-  if (!merged_r) return fail(merged_r.error().message);
-  map::MergedMap& merged = **merged_r;
+  auto worker_r = map::MergeWorker::create(grid_config, map::MergeConfig{});
+  if (!worker_r) return fail(worker_r.error().message);
+  map::MergeWorker& worker = **worker_r;
+  // The snapshot published at the last synchronisation point (see the header comment).
+  std::shared_ptr<const map::MergedMap> published;
+  std::map<std::uint64_t, double> submitted_at_s;  // merge sequence -> simulated time of submission
   // Baseline: one global grid in the world frame at raw odometry.
   auto global_r = map::LocalGrid::create(grid_config);
   if (!global_r) return fail(global_r.error().message);
@@ -209,6 +287,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   pc.box_max_world_m = scene->bounds_world.max();
   pc.seed = seed;
   pc.fan = fan;
+  pc.global_search = global_search;
   if (mode == Mode::kBaseline) {
     pc.constrained_sampling = false;
     pc.gain_along_edge = false;
@@ -219,8 +298,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   plan::NbvPlanner& planner = **planner_r;
 
   std::vector<IterationRow> iterations;
+  std::vector<CollisionRow> collision_rows;
   std::vector<MergeRow> merges;
-  std::vector<double> plan_ms_all, merge_ms_all;
+  std::vector<double> plan_ms_all, plan_cpu_ms_all, merge_ms_all, merge_wait_ms_all;
   std::vector<std::pair<Pose3, Pose3>> path_samples;  // (true, estimated) once per second
   ScanQueue queue;
   auto simS = [&] { return 1e-9 * static_cast<double>(simulation.stampNs()); };
@@ -234,6 +314,17 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     if (mode == Mode::kBaseline || pipeline.submaps().empty()) return queue.T_odom_now;
     const slam::SubmapRecord& r = pipeline.submaps().back();
     return r.T_world_base * r.T_world_base_odom.inverse() * queue.T_odom_now;
+  };
+
+  // Waits for the merge thread, publishes its snapshot to the planner and collects its timings.
+  auto syncMerges = [&]() -> vog::Status {
+    if (auto st = worker.waitIdle(); !st) return st;
+    published = worker.snapshot();
+    for (const map::MergeRecord& r : worker.takeRecords()) {
+      merge_ms_all.push_back(r.merge_ms);
+      merges.push_back({submitted_at_s[r.sequence], r.n_submaps, r.merge_ms, r.stats.remerged});
+    }
+    return {};
   };
 
   vog::Status mapping_error;
@@ -259,22 +350,26 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         return;
       }
       if (!u->closed_submap && u->moved.empty()) continue;
-      const vog::bench::Stopwatch w;
-      auto stats = merged.sync(pipeline.map().entries(), map::MergeConfig{});
-      if (!stats) {
-        mapping_error = stats.error();
+      if (auto st = syncMerges(); !st) {
+        mapping_error = st;
         return;
       }
-      const double ms = 1e3 * w.seconds();
-      merge_ms_all.push_back(ms);
-      merges.push_back({simS(), pipeline.submaps().size(), ms, stats->remerged});
+      submitted_at_s[worker.submit(pipeline.map().entries())] = simS();
     }
   };
 
   // The map the planner sees. Baseline: a finalized copy of the global grid (its cost is the
   // baseline's map update, counted as a merge).
   auto snapshot = [&]() -> vog::Result<std::shared_ptr<const map::MergedMap>> {
-    if (mode != Mode::kBaseline) return merged.snapshot();
+    if (mode != Mode::kBaseline) {
+      // A fixed point in simulated time (the vehicle reached its waypoint): the merge submitted
+      // since the last one has overlapped with the simulation; the wait is recorded.
+      const vog::bench::Stopwatch w;
+      if (auto st = syncMerges(); !st) return st.error();
+      merge_wait_ms_all.push_back(1e3 * w.seconds());
+      if (!published) return vog::Error{"no merged map yet (no submap was completed)"};
+      return published;
+    }
     const vog::bench::Stopwatch w;
     auto copy = map::LocalGrid::fromTree(grid_config, std::make_unique<octomap::OcTree>(global.tree()));
     if (!copy) return copy.error();
@@ -324,6 +419,16 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       next_path_sample_ns += 1'000'000'000;
     }
     if (step.status == sim::MotionStatus::kBlocked) {
+      const plan::TraversabilityGrid* g = planner.traversability();
+      CollisionRow c{simS(), simulation.vehicle().state().T_world_vehicle(), estimatedPose(),
+                     static_cast<int>(iterations.size()) - 1, pipeline.closures().size(),
+                     g != nullptr && g->isSafe(estimatedPose().translation())};
+      const auto& last_map = mode == Mode::kBaseline ? baseline_snapshot : published;
+      if (last_map) c.map_clearance_m = nearestOccupiedM(*last_map, c.T_estimated.translation(), 2.0);
+      c.true_clearance_m = 2.0;
+      for (const Eigen::Vector3d& q : surface.points)
+        c.true_clearance_m = std::min(c.true_clearance_m, (q - c.T_true.translation()).norm());
+      collision_rows.push_back(c);
       ++collisions;  // the planner sent the vehicle into the scene; it was stopped short
       if (auto st = simulation.vehicle().setWaypoints({}); !st) return fail(st.error().message);
     }
@@ -343,8 +448,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     auto snap = snapshot();
     if (!snap) return fail("map snapshot: " + snap.error().message);
     const vog::bench::Stopwatch w;
+    const double cpu0 = threadCpuS();
     auto r = planner.plan(*snap, toWaypoint(estimatedPose()));
     const double ms = 1e3 * w.seconds();
+    plan_cpu_ms_all.push_back(1e3 * (threadCpuS() - cpu0));
     if (!r) return fail("planner: " + r.error().message);
     plan_ms_all.push_back(ms);
     IterationRow row;
@@ -355,6 +462,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     row.status = plan::toString(r->status);
     row.best_gain = r->best_gain;
     row.tree_size = r->tree_size;
+    row.global_goal = r->global_goal;
+    row.global_candidates = r->global_candidates;
+    if (!planner.lastTree().empty())
+      row.root_shift_m = (planner.lastTree().front().w.p_world - estimatedPose().translation()).norm();
     if (row.iteration % coverage_every == 0) row.coverage = coverageOf(**snap, observable->points.points, 2 * grid_config.resolution_m);
     iterations.push_back(row);
     if (r->status == plan::PlanStatus::kNoPath) {
@@ -366,15 +477,18 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       end_reason = "stalled";
       break;
     }
-    if (auto st = sendWaypoints(r->waypoints); !st) return fail(st.error().message);
+    std::vector<plan::Waypoint> wps = r->waypoints;
+    if (!root_first && row.root_shift_m > 0.0 && wps.size() > 1) wps.erase(wps.begin());
+    if (auto st = sendWaypoints(wps); !st) return fail(st.error().message);
   }
 
   // Final map and evaluation.
   if (mode != Mode::kBaseline) {
     auto u = pipeline.finish();
     if (!u) return fail(u.error().message);
-    auto stats = merged.sync(pipeline.map().entries(), map::MergeConfig{});
-    if (!stats) return fail(stats.error().message);
+    if (auto st = syncMerges(); !st) return fail(st.error().message);
+    worker.submit(pipeline.map().entries());
+    if (auto st = syncMerges(); !st) return fail(st.error().message);
   }
   auto final_snap = snapshot();
   if (!final_snap) return fail(final_snap.error().message);
@@ -395,7 +509,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   std::vector<Eigen::Vector3d> observable_in_map;
   const Pose3 T_estimate_reference = error->T_reference_estimate.inverse();
   for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(T_estimate_reference * p);
-  const double coverage = coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m);
+  std::vector<bool> covered_flags;
+  const double coverage = coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
   const double coverage_unaligned = coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
   if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
 
@@ -404,12 +519,31 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     std::filesystem::create_directories(out_dir, ec);
     if (ec) return fail("cannot create " + out_dir + ": " + ec.message());
     std::ofstream it(std::filesystem::path(out_dir) / "iterations.csv");
-    it << "iteration,sim_s,n_submaps,plan_ms,status,best_gain,tree_size,coverage\n";
+    it << "iteration,sim_s,n_submaps,plan_ms,status,best_gain,tree_size,root_shift_m,global_goal,global_candidates,"
+          "coverage\n";
     for (const IterationRow& r : iterations) {
       it << r.iteration << ',' << r.sim_s << ',' << r.n_submaps << ',' << r.plan_ms << ',' << r.status << ','
-         << r.best_gain << ',' << r.tree_size << ',';
+         << r.best_gain << ',' << r.tree_size << ',' << r.root_shift_m << ',' << (r.global_goal ? 1 : 0) << ','
+         << r.global_candidates << ',';
       if (r.coverage >= 0.0) it << r.coverage;
       it << '\n';
+    }
+    std::ofstream co(std::filesystem::path(out_dir) / "collisions.csv");
+    co << "sim_s,true_x_m,true_y_m,true_z_m,true_yaw_rad,est_x_m,est_y_m,est_z_m,est_yaw_rad,plan_iteration,closures,"
+          "estimate_safe,map_clearance_m,true_clearance_m\n";
+    for (const CollisionRow& r : collision_rows) {
+      const Eigen::Vector3d a = r.T_true.translation(), b = r.T_estimated.translation();
+      co << r.sim_s << ',' << a.x() << ',' << a.y() << ',' << a.z() << ',' << vog::geometry::yawOf(r.T_true.linear())
+         << ',' << b.x() << ',' << b.y() << ',' << b.z() << ',' << vog::geometry::yawOf(r.T_estimated.linear()) << ','
+         << r.plan_iteration << ',' << r.closures << ',' << (r.estimate_safe ? 1 : 0) << ',' << r.map_clearance_m << ','
+         << r.true_clearance_m << '\n';
+    }
+    // Observable points (in the map frame, after the alignment) and whether the final map covers them.
+    std::ofstream cp(std::filesystem::path(out_dir) / "coverage_points.csv");
+    cp << "x_m,y_m,z_m,covered\n";
+    for (std::size_t i = 0; i < observable_in_map.size(); ++i) {
+      const Eigen::Vector3d& p = observable_in_map[i];
+      cp << p.x() << ',' << p.y() << ',' << p.z() << ',' << (covered_flags[i] ? 1 : 0) << '\n';
     }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
     mg << "sim_s,n_submaps,merge_ms,remerged\n";
@@ -423,7 +557,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     std::ofstream mp(std::filesystem::path(out_dir) / "map_points.csv");
     mp << "x_m,y_m,z_m\n";
     for (const Eigen::Vector3d& p : estimate) mp << p.x() << ',' << p.y() << ',' << p.z() << '\n';
-    for (const std::ofstream* f : {&it, &mg, &pa, &mp})
+    for (const std::ofstream* f : {&it, &mg, &pa, &mp, &co, &cp})
       if (!*f) return fail("error while writing the CSV files in " + out_dir);
   }
 
@@ -443,6 +577,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("sim_s", simS());
   out.add("wall_s", total.seconds());
   out.add("realtime_factor", simS() / total.seconds());
+  // With a shared machine the wall time includes waiting for a core: CPU time of all threads too.
+  out.add("cpu_s", processCpuS());
+  out.add("realtime_factor_cpu", simS() / processCpuS());
   out.add("plan_iterations", static_cast<std::int64_t>(plan_ms_all.size()));
   out.add("plan_ms_mean", plan_ms_all.empty() ? 0.0 : [&] {
     double s = 0.0;
@@ -451,7 +588,11 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   }());
   out.add("plan_ms_p95", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 0.95));
   out.add("plan_ms_max", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 1.0));
+  out.add("plan_cpu_ms_p95", plan_cpu_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_cpu_ms_all, 0.95));
+  out.add("plan_global_searches", static_cast<std::int64_t>(std::count_if(
+                                      iterations.begin(), iterations.end(), [](const IterationRow& r) { return r.global_candidates > 0; })));
   out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
+  out.add("merge_wait_ms_p95", merge_wait_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_wait_ms_all, 0.95));
   out.add("collisions", static_cast<std::int64_t>(collisions));
   out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
   std::cout << out.str();

@@ -202,10 +202,19 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   }
   result.samples = samples;
   result.tree_size = static_cast<int>(tree_.size());
+  // The vehicle is sent to the tree's root first when it was snapped to a safe voxel.
+  auto fromRoot = [&](PlanResult r) {
+    if (r.status == PlanStatus::kNoPath || start.p_world == current.p_world) return r;
+    std::vector<Waypoint> w{Waypoint{start.p_world, current.yaw_rad}};
+    for (const Waypoint& x : r.waypoints) w.push_back(x);
+    r.waypoints = std::move(w);
+    return r;
+  };
   if (tree_.size() == 1) {
-    result.status = PlanStatus::kNoPath;
     result.reason = "no collision-free edge from the current position " + describe(root) + " in " +
                     std::to_string(samples) + " samples";
+    if (config_.global_search && globalGoal(map, start, result)) return fromRoot(std::move(result));
+    result.status = PlanStatus::kNoPath;
     return result;
   }
   std::size_t best = 1;
@@ -218,7 +227,8 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     s << "best branch value " << result.best_value << " <= plan.gain_threshold " << config_.gain_threshold << " after "
       << result.tree_size << " nodes";
     result.reason = s.str();
-    return goHome(start, std::move(result));
+    if (config_.global_search && globalGoal(map, start, result)) return fromRoot(std::move(result));
+    return fromRoot(goHome(start, std::move(result)));
   }
   // Indices from the best node back to the root (at least two: best >= 1).
   std::vector<std::size_t> chain;
@@ -229,7 +239,81 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   result.waypoints.push_back(tree_[chain[chain.size() - 2]].w);
   seed_branch_.clear();
   for (std::size_t k = 2; k < result.best_branch.size(); ++k) seed_branch_.push_back(result.best_branch[k]);
-  return result;
+  return fromRoot(std::move(result));
+}
+
+std::vector<Waypoint> NbvPlanner::alongPath(const std::vector<Eigen::Vector3d>& points, double start_yaw,
+                                            double goal_yaw) const {
+  std::vector<Waypoint> out;
+  double yaw = start_yaw;
+  auto turnToward = [&](double target) {
+    const double d = geometry::wrapAngle(target - yaw);
+    yaw = geometry::wrapAngle(yaw + std::clamp(d, -config_.max_heading_change_rad, config_.max_heading_change_rad));
+    return yaw;
+  };
+  for (std::size_t i = 1; i < points.size(); ++i) out.push_back({points[i], turnToward(goal_yaw)});
+  while (std::abs(geometry::wrapAngle(goal_yaw - yaw)) > 1e-12) out.push_back({points.back(), turnToward(goal_yaw)});
+  if (!out.empty()) out.back().yaw_rad = geometry::wrapAngle(goal_yaw);
+  return out;
+}
+
+bool NbvPlanner::globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result) {
+  const auto lattice = std::max(1L, std::lround(config_.global_spacing_m / resolution_m_));
+  auto onLattice = [&](int v) { return ((v % lattice) + lattice) % lattice == 0; };
+  const std::vector<map::VoxelKey> reach = grid_->reachable(start.p_world, grid_->statusArray().size());
+  std::vector<Eigen::Vector3d> candidates;  // nearest first (breadth-first order)
+  for (const map::VoxelKey& k : reach) {
+    if (!onLattice(k.x()) || !onLattice(k.y()) || !onLattice(k.z())) continue;
+    const Eigen::Vector3d c = map::keyToCentre(k, resolution_m_);
+    // A goal reached before whose gain did not go away (unknown voxels the fan cannot resolve) is
+    // not chosen again: the search cannot loop.
+    const bool chosen_before = std::any_of(global_goals_.begin(), global_goals_.end(), [&](const Eigen::Vector3d& g) {
+      return (g - c).norm() < config_.global_spacing_m;
+    });
+    if (!chosen_before) candidates.push_back(c);
+  }
+  // More candidates than evaluations allowed: every stride-th, so the whole reachable space is
+  // sampled (nearest first) rather than only its nearest part.
+  const std::size_t max_candidates = static_cast<std::size_t>(config_.global_max_candidates);
+  const std::size_t stride = std::max<std::size_t>(1, (candidates.size() + max_candidates - 1) / max_candidates);
+  int evaluated = 0;
+  for (std::size_t i = 0; i < candidates.size(); i += stride) {
+    const Eigen::Vector3d& c = candidates[i];
+    ++evaluated;
+    // The fan at 8 headings (the vehicle can face any of them on arrival).
+    double best_gain = 0.0;
+    double best_yaw = start.yaw_rad;
+    for (int h = 0; h < 8; ++h) {
+      const Waypoint w{c, geometry::wrapAngle(start.yaw_rad + h * std::numbers::pi / 4)};
+      const double g = gain_->segmentGain(map, w, w, &*grid_);
+      if (g > best_gain) {
+        best_gain = g;
+        best_yaw = w.yaw_rad;
+      }
+    }
+    if (best_gain <= config_.global_min_gain) continue;
+    auto path = grid_->findPath(start.p_world, c);
+    if (!path.ok()) continue;  // reachable by construction; kept as a guard
+    global_goals_.push_back(c);
+    seed_branch_.clear();
+    result.status = PlanStatus::kExplore;
+    result.global_goal = true;
+    result.global_candidates = evaluated;
+    result.best_gain = best_gain;
+    double length_m = 0.0;
+    for (std::size_t j = 1; j < path.value().size(); ++j) length_m += (path.value()[j] - path.value()[j - 1]).norm();
+    result.best_value = best_gain * std::exp(-config_.lambda * length_m);
+    result.waypoints = alongPath(path.value(), start.yaw_rad, best_yaw);
+    result.best_branch.assign(1, start);
+    for (const Waypoint& x : result.waypoints) result.best_branch.push_back(x);
+    std::ostringstream s;
+    s << "global goal " << describe(c) << " (fan gain " << best_gain << ", " << evaluated
+      << " candidates) after: " << result.reason;
+    result.reason = s.str();
+    return true;
+  }
+  result.global_candidates = evaluated;
+  return false;
 }
 
 PlanResult NbvPlanner::goHome(const Waypoint& current, PlanResult result) const {
@@ -241,17 +325,8 @@ PlanResult NbvPlanner::goHome(const Waypoint& current, PlanResult result) const 
   }
   result.status = PlanStatus::kComplete;
   // Headings turn toward the home heading by at most the allowed change per waypoint (thesis 4.5.3).
-  double yaw = current.yaw_rad;
-  auto turnToward = [&](double target) {
-    const double d = geometry::wrapAngle(target - yaw);
-    yaw = geometry::wrapAngle(yaw + std::clamp(d, -config_.max_heading_change_rad, config_.max_heading_change_rad));
-    return yaw;
-  };
-  const auto& points = path.value();
-  for (std::size_t i = 1; i < points.size(); ++i) result.waypoints.push_back({points[i], turnToward(home_.yaw_rad)});
-  while (std::abs(geometry::wrapAngle(home_.yaw_rad - yaw)) > 1e-12)
-    result.waypoints.push_back({home_.p_world, turnToward(home_.yaw_rad)});
-  result.waypoints.back().yaw_rad = home_.yaw_rad;
+  result.waypoints = alongPath(path.value(), current.yaw_rad, home_.yaw_rad);
+  if (result.waypoints.empty()) result.waypoints.push_back(home_);
   return result;
 }
 

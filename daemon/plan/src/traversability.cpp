@@ -385,6 +385,30 @@ Result<std::vector<Eigen::Vector3d>> TraversabilityGrid::findPath(const Eigen::V
   return out;
 }
 
+std::vector<VoxelKey> TraversabilityGrid::reachable(const Eigen::Vector3d& from_world, std::size_t max_voxels) const {
+  std::vector<VoxelKey> order;
+  if (!isSafe(from_world) || max_voxels == 0) return order;
+  std::vector<std::uint8_t> seen(safe_.size(), 0);
+  const VoxelKey start = map::pointToKey(from_world, inv_resolution_);
+  seen[indexOf(start)] = 1;
+  order.push_back(start);
+  static const VoxelKey kSteps[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  // The output doubles as the FIFO queue of the breadth-first search.
+  for (std::size_t head = 0; head < order.size() && order.size() < max_voxels; ++head) {
+    const VoxelKey k = order[head];
+    for (const VoxelKey& s : kSteps) {
+      const VoxelKey nk = k + s;
+      if (!isSafeKey(nk) || !insideBox(map::keyToCentre(nk, resolution_))) continue;
+      std::uint8_t& flag = seen[indexOf(nk)];
+      if (flag != 0) continue;
+      flag = 1;
+      order.push_back(nk);
+      if (order.size() >= max_voxels) break;
+    }
+  }
+  return order;
+}
+
 std::size_t TraversabilityGrid::safeCount() const {
   return static_cast<std::size_t>(std::count(safe_.begin(), safe_.end(), std::uint8_t{1}));
 }

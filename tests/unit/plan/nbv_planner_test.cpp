@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <map>
+#include <tuple>
 #include <mutex>
 #include <numbers>
 #include <thread>
@@ -348,6 +350,152 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   ASSERT_TRUE(planner->plan(final_snap, current).ok());
   const auto scratch = TraversabilityGrid::build(*final_snap, box, anyHeadingBox(c.collision_box_m)).value();
   EXPECT_TRUE(planner->traversability()->sameFlags(scratch));
+}
+
+// Every consecutive pair of waypoints (from `from`) is a known-free edge for the box at any heading,
+// and no waypoint turns more than the allowed heading change.
+void expectPathValid(const map::MergedMap& map, const PlannerConfig& c, const Waypoint& from,
+                     const std::vector<Waypoint>& waypoints) {
+  Waypoint prev = from;
+  for (const Waypoint& w : waypoints) {
+    EXPECT_TRUE(bruteForceEdgeFree(map, prev.p_world, w.p_world, anyHeadingBox(c.collision_box_m)))
+        << prev.p_world.transpose() << " -> " << w.p_world.transpose();
+    EXPECT_LE(std::abs(geometry::wrapAngle(w.yaw_rad - prev.yaw_rad)), c.max_heading_change_rad + 1e-9);
+    prev = w;
+  }
+}
+
+// A receding horizon too short to reach the unknown half: the local tree finds no gain. Bircher's
+// rule would call the room explored; the global search sends the vehicle on toward the unknown.
+PlannerConfig shortHorizon(std::uint64_t seed) {
+  PlannerConfig c = roomConfig(seed);
+  c.planner_range_m = 1.8;  // the unknown begins at x = 0: out of sight from x < -1.8
+  c.max_edge_m = 0.3;
+  c.n_max = 4;
+  c.n_tol = 7;  // at most 7 edges of 0.3 m: the tree stays within 2.1 m of the root (x <= -2.0)
+  c.max_samples = 300;
+  return c;
+}
+
+TEST_F(PlannerMaps, GlobalSearchLeavesALocalMinimumAlongAKnownFreePath) {
+  const auto map = half();
+  const Waypoint start{{-4.1, 0.0, -1.75}, kPi};
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    PlannerConfig local_only = shortHorizon(seed);
+    local_only.global_search = false;
+    auto a = NbvPlanner::create(local_only, start).value();
+    const PlanResult ra = a->plan(map, start).value();
+    EXPECT_EQ(ra.status, PlanStatus::kComplete) << ra.reason;  // the local minimum
+    EXPECT_FALSE(ra.global_goal);
+
+    auto b = NbvPlanner::create(shortHorizon(seed), start).value();
+    const PlanResult rb = b->plan(map, start).value();
+    ASSERT_EQ(rb.status, PlanStatus::kExplore) << rb.reason;
+    EXPECT_TRUE(rb.global_goal);
+    EXPECT_GT(rb.global_candidates, 0);
+    EXPECT_LE(rb.global_candidates, b->config().global_max_candidates);
+    ASSERT_FALSE(rb.waypoints.empty());
+    expectPathValid(*map, b->config(), start, rb.waypoints);
+    // The goal's fan sees unknown space (more than global_min_gain voxels of it), so it lies within
+    // the planner range of the unknown half.
+    auto probe = SonarGain::create(b->config(), map->resolution()).value();
+    const Waypoint& goal = rb.waypoints.back();
+    EXPECT_GT(probe.segmentGain(*map, goal, goal), b->config().global_min_gain);
+    EXPECT_GT(goal.p_world.x(), -1.8 - 0.1);
+    EXPECT_EQ(rb.best_gain, probe.segmentGain(*map, goal, goal));
+  }
+}
+
+TEST_F(PlannerMaps, GlobalGoalIsNeverChosenTwice) {
+  // The vehicle does not move and the map does not change (as if the fan could not resolve what it
+  // was sent to see): every call picks a new goal. The lattice is finite, so the search runs out
+  // instead of looping.
+  const auto map = half();
+  const Waypoint start{{-4.1, 0.0, -1.75}, kPi};
+  PlannerConfig c = shortHorizon(1);
+  auto planner = NbvPlanner::create(c, start).value();
+  std::vector<Eigen::Vector3d> goals;
+  for (int call = 0; call < 6; ++call) {
+    const PlanResult r = planner->plan(map, start).value();
+    ASSERT_TRUE(r.global_goal) << r.reason;
+    const Eigen::Vector3d g = r.waypoints.back().p_world;
+    for (const Eigen::Vector3d& earlier : goals) ASSERT_GE((g - earlier).norm(), c.global_spacing_m - 1e-9);
+    goals.push_back(g);
+  }
+}
+
+TEST_F(PlannerMaps, SnappedRootIsTheFirstWaypoint) {
+  // 0.4 m from the west wall: the collision box at any heading is not safe there, the nearest safe
+  // voxel is within root_tolerance_m. The vehicle must go there first: the edges the planner checked
+  // start there, not at the estimate.
+  const auto map = full();
+  const Waypoint home{{-3.0, -1.5, -1.75}, 0.0};
+  PlannerConfig c = roomConfig();
+  c.global_max_candidates = 20;  // the room is fully known: nothing to find, keep the test fast
+  auto planner = NbvPlanner::create(c, home).value();
+  const Waypoint current{{-4.6, 0.0, -1.75}, 0.4};
+  const PlanResult r = planner->plan(map, current).value();
+  ASSERT_EQ(r.status, PlanStatus::kComplete) << r.reason;
+  ASSERT_FALSE(planner->traversability()->isSafe(current.p_world));
+  ASSERT_GE(r.waypoints.size(), 2u);
+  const Waypoint& root = planner->lastTree().front().w;
+  EXPECT_EQ(r.waypoints.front().p_world, root.p_world);
+  EXPECT_EQ(r.waypoints.front().yaw_rad, current.yaw_rad);
+  EXPECT_NE(root.p_world, current.p_world);
+  EXPECT_LE((root.p_world - current.p_world).norm(), c.root_tolerance_m);
+  EXPECT_TRUE(planner->traversability()->isSafe(root.p_world));
+  expectPathValid(*map, c, root, {r.waypoints.begin() + 1, r.waypoints.end()});
+  EXPECT_EQ(r.waypoints.back().p_world, home.p_world);
+}
+
+TEST(TraversabilityGrid, ReachableIsTheConnectedSafeRegionInBreadthFirstOrder) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  auto all = [](const map::VoxelKey&) { return true; };
+  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
+  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all),
+                                              test_fixtures::carvedGrid(config, east, all)});
+  const auto grid = TraversabilityGrid::build(*map, kRoom, anyHeadingBox({1.0, 1.0, 0.5})).value();
+  const Eigen::Vector3d from(-3.0, 0.0, -1.75);
+  const auto order = grid.reachable(from, grid.statusArray().size());
+  ASSERT_FALSE(order.empty());
+  EXPECT_EQ(order.front(), map::pointToKey(from, 1.0 / res));
+  // Exactly the safe voxels of the west room (the east room is safe too, but not connected).
+  std::size_t west_safe = 0;
+  const map::KeyBox keys = grid.gridKeys();
+  map::VoxelKey k;
+  for (k.z() = keys.min.z(); k.z() <= keys.max.z(); ++k.z())
+    for (k.y() = keys.min.y(); k.y() <= keys.max.y(); ++k.y())
+      for (k.x() = keys.min.x(); k.x() <= keys.max.x(); ++k.x())
+        if (grid.isSafeKey(k) && map::keyToCentre(k, res).x() < 0.0) ++west_safe;
+  ASSERT_GT(west_safe, 100u);
+  EXPECT_EQ(order.size(), west_safe);
+  // Breadth-first: every voxel after the first is a face neighbour of one listed before it, and
+  // its step count is one more than that neighbour's (the first listed), never decreasing.
+  std::map<std::tuple<int, int, int>, int> steps;
+  steps[{order[0].x(), order[0].y(), order[0].z()}] = 0;
+  int last_steps = 0;
+  for (std::size_t i = 1; i < order.size(); ++i) {
+    const map::VoxelKey& v = order[i];
+    EXPECT_TRUE(grid.isSafeKey(v));
+    EXPECT_LT(map::keyToCentre(v, res).x(), 0.0);
+    int best = -1;
+    for (const map::VoxelKey& d : {map::VoxelKey(1, 0, 0), map::VoxelKey(-1, 0, 0), map::VoxelKey(0, 1, 0),
+                                   map::VoxelKey(0, -1, 0), map::VoxelKey(0, 0, 1), map::VoxelKey(0, 0, -1)}) {
+      const map::VoxelKey n = v + d;
+      const auto it = steps.find({n.x(), n.y(), n.z()});
+      if (it != steps.end() && (best < 0 || it->second < best)) best = it->second;
+    }
+    ASSERT_GE(best, 0) << "voxel " << i << " has no earlier neighbour";
+    const auto [pos, inserted] = steps.emplace(std::make_tuple(v.x(), v.y(), v.z()), best + 1);
+    ASSERT_TRUE(inserted) << "voxel " << i << " listed twice";
+    EXPECT_GE(pos->second, last_steps);
+    last_steps = pos->second;
+  }
+  // The cap is honoured; an unsafe start gives nothing.
+  EXPECT_EQ(grid.reachable(from, 10).size(), 10u);
+  EXPECT_TRUE(grid.reachable(Eigen::Vector3d(0.0, 0.0, -1.75), 1000).empty());
 }
 
 }  // namespace

@@ -13,9 +13,16 @@
 // costs the distance the vehicle could have covered meanwhile. The first edge of the best branch is executed; the rest of that branch seeds the next
 // tree (re-checked against the newer map).
 //
-// Termination: when no node's value exceeds gain_threshold after growing to n_tol nodes, exploration is
-// complete and the planner returns a known-free path back to the home pose; when no collision-free
-// edge exists at all (or no way home), it reports kNoPath instead of looping.
+// Global search (PlannerConfig::global_search): when no node's value exceeds gain_threshold (after
+// growing to n_tol nodes or spending max_samples), the nearest reachable lattice view whose fan sees
+// more than global_min_gain becomes the goal, reached along a known-free path (kExplore with several
+// waypoints); a goal is never chosen twice, so the search cannot loop.
+// Termination: when neither the tree nor the global search finds gain, exploration is complete and
+// the planner returns a known-free path back to the home pose; when no collision-free edge exists at
+// all (or no way home), it reports kNoPath instead of looping.
+// Root: when the vehicle's estimate is not a safe voxel, the tree grows from the nearest safe one
+// within root_tolerance_m and the result's waypoints start with that position: every edge the
+// vehicle is sent along is one the planner checked.
 //
 // Lifecycle: create() with a config and the home (start) pose; then plan() with the newest snapshot
 // and the current pose, as often as needed. The planner only reads the snapshots it is given (it
@@ -60,7 +67,9 @@ struct PlanResult {
   int tree_size = 0;                  // nodes including the root
   int samples = 0;                    // sampling attempts
   std::uint64_t map_version = 0;
-  std::string reason;                 // why kComplete / kNoPath
+  std::string reason;                 // why kComplete / kNoPath, or "global goal ..." for a global search
+  bool global_goal = false;           // kExplore toward a goal of the global search
+  int global_candidates = 0;          // gain evaluations of the global search (0: not run)
 };
 
 // The vehicle turns while it moves, so its collision box may face any heading: collisions are checked
@@ -95,6 +104,11 @@ class NbvPlanner {
   bool headingOk(const Waypoint& from, const Waypoint& to) const;
   void addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded);
   PlanResult goHome(const Waypoint& current, PlanResult result) const;
+  // The global search (see above); true when it set `result` to kExplore toward a goal.
+  bool globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result);
+  // Waypoints along `points` (points[0] excluded), heading turned toward goal_yaw by at most
+  // max_heading_change_rad per waypoint, then on the spot at the last point until it is reached.
+  std::vector<Waypoint> alongPath(const std::vector<Eigen::Vector3d>& points, double start_yaw, double goal_yaw) const;
 
   PlannerConfig config_;
   Waypoint home_;
@@ -103,6 +117,7 @@ class NbvPlanner {
   std::optional<SonarGain> gain_;
   double resolution_m_ = 0.0;
   std::vector<Waypoint> seed_branch_;  // best branch of the last call after its first edge
+  std::vector<Eigen::Vector3d> global_goals_;  // goals chosen by the global search so far
   std::vector<TreeNode> tree_;
 };
 

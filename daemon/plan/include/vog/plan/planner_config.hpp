@@ -63,6 +63,19 @@ struct PlannerConfig {
   // Exploration is complete when no branch value exceeds this (in weighted voxels; our choice:
   // a few voxels of unknown space are noise, not a region worth a detour).
   double gain_threshold = 10.0;
+  // Global search when the local tree finds no branch above gain_threshold (our choice; Bircher
+  // 2016 stops there, and its receding horizon of a few 2 m edges declares "complete" while
+  // unexplored regions remain farther away or behind obstacles, the local-minimum problem that
+  // history-aware NBVP variants address, e.g. Selin et al. 2019): candidate views on a lattice of
+  // global_spacing_m over the safe voxels reachable from the vehicle are tried nearest first (in
+  // path steps; every k-th when there are more than global_max_candidates, so the whole reachable
+  // space is sampled); the first whose fan, at the best of 8 headings, sees more than
+  // global_min_gain is the next goal, reached by a known-free path. Exploration is complete only
+  // when none is found.
+  bool global_search = true;
+  double global_spacing_m = 0.5;
+  double global_min_gain = 50.0;
+  int global_max_candidates = 400;  // gain evaluations per search (bounds the time of one call)
   std::uint64_t seed = 1;
   // The sonar whose beams the gain casts; its max_range_m is replaced by planner_range_m.
   geometry::SonarFan fan;

@@ -74,6 +74,11 @@ class TraversabilityGrid {
   // either end is not safe or no path exists.
   Result<std::vector<Eigen::Vector3d>> findPath(const Eigen::Vector3d& from_world, const Eigen::Vector3d& to_world) const;
 
+  // The safe voxels inside the exploration box reachable from `from_world` through safe face
+  // neighbours (the steps findPath takes), in breadth-first order, so by non-decreasing number of
+  // steps; at most max_voxels of them. Empty when `from_world` is not safe.
+  std::vector<map::VoxelKey> reachable(const Eigen::Vector3d& from_world, std::size_t max_voxels) const;
+
   // Dense status array (map::Occupancy per voxel, x fastest, then y, then z) over gridKeys().
   const std::vector<std::uint8_t>& statusArray() const { return status_; }
   const Eigen::Vector3i& gridSize() const { return size_; }
