@@ -1,8 +1,10 @@
 // vogsim: the simulator's command line.
 //   vogsim render --scene S --out DIR     ground truth cloud (PLY), observable subset, top view (PNG)
 //   vogsim survey --scene S --path lawnmower|orbit|file.yaml --seed N --out DIR
+//   vogsim vehicle --scene S [--seed N] [--speedup X] ...   the vehicle behind mock devices
 // Formats: drivers/sim/README.md.
 
+#include "vehicle_command.hpp"
 #include "vog/sim/paths.hpp"
 #include "vog/sim/render.hpp"
 #include "vog/sim/scene.hpp"
@@ -117,8 +119,11 @@ int main(int argc, char** argv) {
   survey->add_option("--margin", pc.margin_m, "Distance kept from the box sides, m");
   survey->add_option("--depth-z", pc.z_m, "z of lawnmower/orbit paths, m (default: start z)");
 
+  vogsim::VehicleCommand vehicle(app);
+
   CLI11_PARSE(app, argc, argv);
 
+  if (vehicle.parsed()) return vehicle.run();
   if (render->parsed()) {
     return runRender(scene_file, out_dir, spacing_m, px_per_m, !no_observable, viewpoint_spacing_m, max_range_m);
   }
