@@ -2,7 +2,7 @@
 // every frame, then a summary of what was dropped (garbage, bad checksums, malformed frames).
 
 #include "commands.hpp"
-#include "json_line.hpp"
+#include "vog/client/json_line.hpp"
 
 #include "vog/backseat/backseat.hpp"
 #include "vog/codec/stream_decoder.hpp"
@@ -244,7 +244,7 @@ int runDecode(const std::string& format, const std::string& path, bool json) {
   const auto bytes = sonar::loadFile(path);
   if (!bytes.ok()) {
     std::cerr << "vogctl decode: " << bytes.error().message << '\n';
-    return 1;
+    return kExitUsage;
   }
   const Printer out{json};
   if (format == "pd0") return decodeStream<dvl::Pd0Codec>(*bytes, out, pd0Record);
@@ -255,7 +255,7 @@ int runDecode(const std::string& format, const std::string& path, bool json) {
   if (format == "ddf") return decodeSonar(*bytes, false, out);
   if (format == "aris") return decodeSonar(*bytes, true, out);
   std::cerr << "vogctl decode: unknown format " << format << '\n';
-  return 1;
+  return kExitUsage;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <asio.hpp>
 
+#include <algorithm>
 #include <array>
 
 namespace vog::client {
@@ -295,81 +296,101 @@ Result<std::string> ApiClient::configText() {
   return r->config_text().text();
 }
 
-Status ApiClient::fetchMap(api::MapMirror& mirror, const ProgressFn& progress, std::uint32_t max_blocks_per_chunk) {
-  v1::Envelope req;
-  req.mutable_get_map()->set_since_version(mirror.version());
-  req.mutable_get_map()->set_max_blocks_per_chunk(max_blocks_per_chunk);
-  req.set_request_id(next_id_++);
-  auto id = send(std::move(req));
+namespace {
+
+// Index and count of a chunk of a chunked transfer (map.proto MapChunk, api.proto CloudChunk).
+struct ChunkHeader {
+  std::uint32_t index = 0;
+  std::uint32_t count = 0;
+};
+
+ChunkHeader chunkHeader(const v1::Envelope& e) {
+  if (e.has_map_chunk()) return {e.map_chunk().chunk_index(), e.map_chunk().chunk_count()};
+  if (e.has_cloud_chunk()) return {e.cloud_chunk().chunk_index(), e.cloud_chunk().chunk_count()};
+  return {};
+}
+
+}  // namespace
+
+Status ApiClient::receiveChunks(v1::Envelope request, const char* what, v1::Envelope::BodyCase chunk_body,
+                                const std::function<Status(v1::Envelope&, std::uint32_t index)>& take) {
+  request.set_request_id(next_id_++);
+  auto id = send(std::move(request));
   if (!id) return id.error();
-  v1::MapDelta combined;
+  // proto/README.md: chunks 0 .. count-1 in order, each announcing the same count (at least 1).
   std::uint32_t expected = 0;
   std::uint32_t count = 0;
   do {
     auto r = awaitResponse(*id);
     if (!r) return r.error();
-    if (!r->has_map_chunk()) return Error{"map: the server answered with another message"};
-    v1::MapChunk& chunk = *r->mutable_map_chunk();
-    if (chunk.chunk_index() != expected || (expected > 0 && chunk.chunk_count() != count) ||
-        chunk.chunk_count() == 0) {
-      return Error{"map: chunk " + std::to_string(chunk.chunk_index()) + " of " +
-                   std::to_string(chunk.chunk_count()) + " arrived, expected chunk " + std::to_string(expected)};
+    if (r->body_case() != chunk_body) return Error{std::string(what) + ": the server answered with another message"};
+    const ChunkHeader h = chunkHeader(*r);
+    if (h.index != expected || (expected > 0 && h.count != count) || h.count == 0) {
+      return Error{std::string(what) + ": chunk " + std::to_string(h.index) + " of " + std::to_string(h.count) +
+                   " arrived, expected chunk " + std::to_string(expected)};
     }
-    count = chunk.chunk_count();
-    v1::MapDelta& part = *chunk.mutable_delta();
-    if (expected == 0) {
-      *combined.mutable_grid() = part.grid();
-      combined.set_since_version(part.since_version());
-      combined.set_version(part.version());
-      combined.set_n_submaps(part.n_submaps());
-      combined.mutable_changed()->Reserve(static_cast<int>(std::min<std::uint64_t>(chunk.blocks_total(), 1u << 24)));
-    } else if (part.version() != combined.version() || part.since_version() != combined.since_version()) {
-      return Error{"map: chunk " + std::to_string(expected) + " belongs to another version"};
-    }
-    for (auto& b : *part.mutable_removed()) combined.add_removed()->Swap(&b);
-    for (auto& b : *part.mutable_changed()) combined.add_changed()->Swap(&b);
-    if (progress) progress(static_cast<std::uint64_t>(combined.changed_size()), chunk.blocks_total());
+    count = h.count;
+    if (Status s = take(*r, expected); !s.ok()) return s;
     ++expected;
   } while (expected < count);
+  return {};
+}
+
+Status ApiClient::fetchMap(api::MapMirror& mirror, const ProgressFn& progress, std::uint32_t max_blocks_per_chunk) {
+  v1::Envelope req;
+  req.mutable_get_map()->set_since_version(mirror.version());
+  req.mutable_get_map()->set_max_blocks_per_chunk(max_blocks_per_chunk);
+  v1::MapDelta combined;
+  const Status received = receiveChunks(
+      std::move(req), "map", v1::Envelope::kMapChunk, [&](v1::Envelope& e, std::uint32_t index) -> Status {
+        v1::MapChunk& chunk = *e.mutable_map_chunk();
+        v1::MapDelta& part = *chunk.mutable_delta();
+        if (index == 0) {
+          *combined.mutable_grid() = part.grid();
+          combined.set_since_version(part.since_version());
+          combined.set_version(part.version());
+          combined.set_n_submaps(part.n_submaps());
+          combined.mutable_changed()->Reserve(
+              static_cast<int>(std::min<std::uint64_t>(chunk.blocks_total(), 1u << 24)));
+        } else if (part.version() != combined.version() || part.since_version() != combined.since_version()) {
+          return Error{"map: chunk " + std::to_string(index) + " belongs to another version"};
+        }
+        for (auto& b : *part.mutable_removed()) combined.add_removed()->Swap(&b);
+        for (auto& b : *part.mutable_changed()) combined.add_changed()->Swap(&b);
+        if (progress) progress(static_cast<std::uint64_t>(combined.changed_size()), chunk.blocks_total());
+        return {};
+      });
+  if (!received.ok()) return received;
   return mirror.apply(combined);
 }
 
 Result<api::Cloud> ApiClient::cloud(const ProgressFn& progress) {
   v1::Envelope req;
   req.mutable_get_cloud();
-  req.set_request_id(next_id_++);
-  auto id = send(std::move(req));
-  if (!id) return id.error();
   api::Cloud out;
-  std::uint32_t expected = 0;
-  std::uint32_t count = 0;
   std::uint64_t total = 0;
-  do {
-    auto r = awaitResponse(*id);
-    if (!r) return r.error();
-    if (!r->has_cloud_chunk()) return Error{"cloud: the server answered with another message"};
-    const v1::CloudChunk& chunk = r->cloud_chunk();
-    if (chunk.chunk_index() != expected || (expected > 0 && chunk.chunk_count() != count) ||
-        chunk.chunk_count() == 0) {
-      return Error{"cloud: chunk " + std::to_string(chunk.chunk_index()) + " arrived, expected " +
-                   std::to_string(expected)};
-    }
-    count = chunk.chunk_count();
-    total = chunk.points_total();
-    if (chunk.xyz_m_size() % 3 != 0 || (chunk.normals_size() != 0 && chunk.normals_size() != chunk.xyz_m_size())) {
-      return Error{"cloud: chunk " + std::to_string(expected) + " has " + std::to_string(chunk.xyz_m_size()) +
-                   " coordinates and " + std::to_string(chunk.normals_size()) + " normal components"};
-    }
-    for (int i = 0; i + 2 < chunk.xyz_m_size(); i += 3) {
-      api::CloudPoint p;
-      p.p_world_m = {chunk.xyz_m(i), chunk.xyz_m(i + 1), chunk.xyz_m(i + 2)};
-      if (chunk.normals_size() != 0) p.normal_world = {chunk.normals(i), chunk.normals(i + 1), chunk.normals(i + 2)};
-      out.push_back(p);
-    }
-    if (out.size() > total) return Error{"cloud: more points than the announced " + std::to_string(total)};
-    if (progress) progress(out.size(), total);
-    ++expected;
-  } while (expected < count);
+  const Status received = receiveChunks(
+      std::move(req), "cloud", v1::Envelope::kCloudChunk, [&](v1::Envelope& e, std::uint32_t index) -> Status {
+        const v1::CloudChunk& chunk = e.cloud_chunk();
+        total = chunk.points_total();
+        if (chunk.xyz_m_size() % 3 != 0 ||
+            (chunk.normals_size() != 0 && chunk.normals_size() != chunk.xyz_m_size())) {
+          return Error{"cloud: chunk " + std::to_string(index) + " has " + std::to_string(chunk.xyz_m_size()) +
+                       " coordinates and " + std::to_string(chunk.normals_size()) + " normal components"};
+        }
+        for (int i = 0; i + 2 < chunk.xyz_m_size(); i += 3) {
+          api::CloudPoint p;
+          p.p_world_m = {chunk.xyz_m(i), chunk.xyz_m(i + 1), chunk.xyz_m(i + 2)};
+          if (chunk.normals_size() != 0) {
+            p.normal_world = {chunk.normals(i), chunk.normals(i + 1), chunk.normals(i + 2)};
+          }
+          out.push_back(p);
+        }
+        if (out.size() > total) return Error{"cloud: more points than the announced " + std::to_string(total)};
+        if (progress) progress(out.size(), total);
+        return {};
+      });
+  if (!received.ok()) return received.error();
   if (out.size() != total) {
     return Error{"cloud: " + std::to_string(out.size()) + " points received, " + std::to_string(total) + " announced"};
   }

@@ -251,13 +251,14 @@ void toProto(const Waypoint& w, v1::Waypoint& out) {
   toProto(w.T_world_target, *out.mutable_target());
   out.set_speed_mps(w.speed_mps);
   out.set_dropped(w.dropped);
+  out.set_published_unix_ns(w.published_unix_ns);
 }
 
 Result<Waypoint> fromProto(const v1::Waypoint& w) {
   auto pose = fromProto(w.target(), "waypoint.target");
   if (!pose) return pose.error();
   if (!std::isfinite(w.speed_mps())) return Error{"waypoint.speed_mps is not finite"};
-  return Waypoint{w.seq(), w.stamp_ns(), *pose, w.speed_mps(), w.dropped()};
+  return Waypoint{w.seq(), w.stamp_ns(), *pose, w.speed_mps(), w.dropped(), w.published_unix_ns()};
 }
 
 void toProto(const PoseUpdate& p, v1::PoseUpdate& out) {

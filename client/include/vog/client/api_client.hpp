@@ -96,6 +96,11 @@ class ApiClient {
   // An Error frame for this id (or id 0) becomes an Error naming its code.
   Result<v1::Envelope> call(v1::Envelope request);
   Result<v1::Envelope> awaitResponse(std::uint64_t id);
+  // A chunked transfer (GetMap, GetCloud): sends `request` and hands each chunk of type `chunk_body`
+  // to `take` in order, checking the sequence (indices 0 .. count-1, one count). `what` names the
+  // transfer in errors; an error from `take` ends the transfer with that error.
+  Status receiveChunks(v1::Envelope request, const char* what, v1::Envelope::BodyCase chunk_body,
+                       const std::function<Status(v1::Envelope&, std::uint32_t index)>& take);
   Error fail(std::string message);
 
   std::unique_ptr<Impl> impl_;
