@@ -23,7 +23,7 @@
 #include "vog/sim/world.hpp"
 #include "vog/sonar/range_extraction.hpp"
 #include "vog/sonar/sonar_udp.hpp"
-#include "vog/vehicle/local_tangent_plane.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
 #include "vog/vehicle/sim_vehicle.hpp"
 
 VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agreement over UDP at several speed-ups") {
@@ -97,7 +97,7 @@ VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agr
       return 1;
     }
     vehicle = std::move(v).value();
-    const auto ltp = *vog::vehicle::LocalTangentPlane::create({config.origin_latitude_deg, config.origin_longitude_deg});
+    const auto ltp = *vog::backseat::LocalTangentPlane::create({config.origin_latitude_deg, config.origin_longitude_deg});
     vog::io::TcpClientConfig tc;
     tc.port = vehicle->endpoints().backseat_port;
     vog::io::TcpClient backseat(ioc, tc, vog::io::steadyStampClock(), [](std::span<const std::uint8_t>, std::int64_t) {});

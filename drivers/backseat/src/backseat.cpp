@@ -140,7 +140,10 @@ struct Parser {
       return a;
     }
     if (name == "BPGHP") {
-      if (!count(9)) return std::nullopt;
+      if (f.size() != 9 && f.size() != 10) {
+        why = "BPGHP has " + std::to_string(f.size() - 1) + " fields, expected 8 or 9";
+        return std::nullopt;
+      }
       WaypointCommand w;
       auto t = time(1);
       const auto id = codec::parseInt(f[2]);
@@ -157,6 +160,12 @@ struct Parser {
       w.longitude_deg = *lon;
       w.depth_m = *depth;
       w.speed_mps = *speed;
+      if (f.size() == 10 && !f[9].empty()) {
+        auto heading = num(9);
+        if (!heading) return std::nullopt;
+        if (!(*heading >= 0.0 && *heading < 360.0)) return fail("heading " + codec::quoted(f[9]) + " is outside [0, 360)");
+        w.heading_deg = *heading;
+      }
       return w;
     }
     if (name == "BPSTS") {
@@ -193,16 +202,21 @@ std::string formatTime(const TimeOfDay& t) {
   return buf;
 }
 
+// Minutes with 6 decimals: 1e-6' is 2 mm of latitude (4 decimals, 0.19 m, is coarser than the map).
+constexpr int kMinuteDecimals = 6;
+constexpr double kMinuteScale = 1e6;
+
 std::string formatAngle(double deg, int degree_digits, char pos, char neg) {
   const double a = std::abs(deg);
   int d = static_cast<int>(a);
-  double m = std::round((a - d) * 60.0 * 10000.0) / 10000.0;
+  double m = std::round((a - d) * 60.0 * kMinuteScale) / kMinuteScale;
   if (m >= 60.0) {
     ++d;
     m = 0.0;
   }
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%0*d%07.4f,%c", degree_digits, d, m, deg < 0 ? neg : pos);
+  std::snprintf(buf, sizeof buf, "%0*d%0*.*f,%c", degree_digits, d, kMinuteDecimals + 3, kMinuteDecimals, m,
+                deg < 0 ? neg : pos);
   return buf;
 }
 
@@ -241,7 +255,7 @@ struct Encoder {
   std::string operator()(const WaypointCommand& w) const {
     return "BPGHP," + formatTime(w.time) + "," + std::to_string(w.id) + "," +
            formatAngle(w.latitude_deg, 2, 'N', 'S') + "," + formatAngle(w.longitude_deg, 3, 'E', 'W') + "," +
-           num(w.depth_m, 2) + "," + num(w.speed_mps, 2);
+           num(w.depth_m, 2) + "," + num(w.speed_mps, 2) + (w.heading_deg ? "," + num(*w.heading_deg, 2) : "");
   }
   std::string operator()(const Heartbeat& h) const {
     return "BPSTS," + formatTime(h.time) + "," + std::to_string(std::clamp(h.state, 0, 255)) + "," + sanitize(h.text);

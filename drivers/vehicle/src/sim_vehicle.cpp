@@ -21,10 +21,13 @@
 #include "vog/mock/socket_devices.hpp"
 #include "vog/mock/stream_server.hpp"
 #include "vog/vehicle/control.hpp"
-#include "vog/vehicle/local_tangent_plane.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
 
 namespace vog::vehicle {
 namespace {
+
+using backseat::GeoPoint;
+using backseat::LocalTangentPlane;
 
 using Clock = std::chrono::steady_clock;
 
@@ -482,7 +485,13 @@ void SimVehicle::Impl::handleBackseat(const backseat::BackseatSentence& s) {
     const Eigen::Vector2d d = target_true.head<2>() - st.xyz_world.head<2>();
     sim::Waypoint wp;
     wp.xyz_world = target_true;
-    wp.yaw_rad = d.norm() > config_.face_target_min_distance_m ? std::atan2(d.y(), d.x()) : st.yaw_rad;
+    if (cmd->heading_deg) {
+      // A commanded heading is in the navigation frame too: moved by the navigation's yaw error.
+      const double yaw_nav_target = std::numbers::pi / 2 - *cmd->heading_deg * std::numbers::pi / 180.0;
+      wp.yaw_rad = geometry::wrapAngle(yaw_nav_target + st.yaw_rad - geometry::yawOf(T_odom_.linear()));
+    } else {
+      wp.yaw_rad = d.norm() > config_.face_target_min_distance_m ? std::atan2(d.y(), d.x()) : st.yaw_rad;
+    }
     if (Status set = vehicle.setWaypoints({wp}); !set) reason = set.error().message;
   }
   ack.status = reason.empty() ? backseat::AckStatus::kAccepted : backseat::AckStatus::kFailed;

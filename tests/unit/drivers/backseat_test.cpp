@@ -1,8 +1,12 @@
 #include "vog/backseat/backseat.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
 #include "vog/codec/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
 
 namespace vog::backseat {
 namespace {
@@ -30,12 +34,12 @@ TEST(Backseat, NavigationRoundTrip) {
   n.pitch_deg = 0.5;
   n.computed_time = TimeOfDay{45296.2};
   const std::string wire = encodeBackseat(n);
-  EXPECT_EQ(wire.substr(0, 44), "$BFNVG,123456.25,4221.4874,N,07105.2592,W,1,");
+  EXPECT_EQ(wire.substr(0, 48), "$BFNVG,123456.25,4221.487380,N,07105.259240,W,1,");
   auto r = BackseatCodec{}.decode(asBytes(wire));
   ASSERT_TRUE(r.isFrame()) << r.reason();
   const auto& out = std::get<NavSentence>(r.frame());
-  EXPECT_NEAR(out.latitude_deg, n.latitude_deg, 1e-4 / 60.0);
-  EXPECT_NEAR(out.longitude_deg, n.longitude_deg, 1e-4 / 60.0);
+  EXPECT_NEAR(out.latitude_deg, n.latitude_deg, 1e-6 / 60.0);
+  EXPECT_NEAR(out.longitude_deg, n.longitude_deg, 1e-6 / 60.0);
   EXPECT_DOUBLE_EQ(out.time.seconds_since_midnight, 45296.25);
   EXPECT_DOUBLE_EQ(out.depth_m, 12.5);
   EXPECT_DOUBLE_EQ(out.heading_deg, 271.3);
@@ -50,7 +54,7 @@ TEST(Backseat, NavigationRoundTrip) {
 }
 
 TEST(Backseat, CommandAckAndOtherSentencesRoundTrip) {
-  WaypointCommand w{TimeOfDay{10.0}, 42, -33.5, 151.25, 20.0, 0.75};
+  WaypointCommand w{TimeOfDay{10.0}, 42, -33.5, 151.25, 20.0, 0.75, std::nullopt};
   auto rw = BackseatCodec{}.decode(asBytes(encodeBackseat(w)));
   ASSERT_TRUE(rw.isFrame()) << rw.reason();
   const auto& wo = std::get<WaypointCommand>(rw.frame());
@@ -95,7 +99,7 @@ TEST(Backseat, StreamCountsBadChecksumsAndResyncs) {
 TEST(AckTracker, ResendsEveryFiveSecondsAndGivesUpAfterThreeTries) {
   AckTracker t;
   constexpr std::int64_t s = 1'000'000'000;
-  const WaypointCommand w{TimeOfDay{0.0}, 7, 10.0, 20.0, 5.0, 1.0};
+  const WaypointCommand w{TimeOfDay{0.0}, 7, 10.0, 20.0, 5.0, 1.0, std::nullopt};
   auto first = t.send(w, 0);
   ASSERT_TRUE(first.ok());
   EXPECT_FALSE(t.send(w, 1).ok());  // same id already pending
@@ -115,8 +119,8 @@ TEST(AckTracker, ResendsEveryFiveSecondsAndGivesUpAfterThreeTries) {
 
 TEST(AckTracker, AckSettlesTheCommandAndUnknownAckIsAnError) {
   AckTracker t;
-  ASSERT_TRUE(t.send(WaypointCommand{TimeOfDay{}, 1, 0, 0, 1, 1}, 0).ok());
-  ASSERT_TRUE(t.send(WaypointCommand{TimeOfDay{}, 2, 0, 0, 1, 1}, 0).ok());
+  ASSERT_TRUE(t.send(WaypointCommand{TimeOfDay{}, 1, 0, 0, 1, 1, std::nullopt}, 0).ok());
+  ASSERT_TRUE(t.send(WaypointCommand{TimeOfDay{}, 2, 0, 0, 1, 1, std::nullopt}, 0).ok());
   auto o = t.onAck(AckSentence{0, TimeOfDay{}, "BPGHP", TimeOfDay{}, 2, AckStatus::kAccepted, ""});
   ASSERT_TRUE(o.ok());
   EXPECT_TRUE(o->accepted);
@@ -131,6 +135,58 @@ TEST(Heartbeat, DueOncePerSecond) {
   (void)h.emit(Heartbeat{}, 100);
   EXPECT_FALSE(h.due(999'999'999));
   EXPECT_TRUE(h.due(1'000'000'100));
+}
+
+TEST(Backseat, GoToPositionCarriesAnOptionalHeadingAndMillimetrePositions) {
+  WaypointCommand w;
+  w.time = TimeOfDay{100.0};
+  w.id = 9;
+  w.latitude_deg = 42.000012345;
+  w.longitude_deg = -70.999987655;
+  w.depth_m = 2.5;
+  w.speed_mps = 0.25;
+  for (const std::optional<double> heading : {std::optional<double>{}, std::optional<double>{271.25}}) {
+    w.heading_deg = heading;
+    const std::string text = encodeBackseat(w);
+    auto r = BackseatCodec{}.decode(asBytes(text));
+    ASSERT_TRUE(r.isFrame()) << text;
+    const auto& back = std::get<WaypointCommand>(r.frame());
+    // 1e-6 minute of arc: 1.7e-8 deg, about 2 mm.
+    EXPECT_NEAR(back.latitude_deg, w.latitude_deg, 2e-8);
+    EXPECT_NEAR(back.longitude_deg, w.longitude_deg, 2e-8);
+    ASSERT_EQ(back.heading_deg.has_value(), heading.has_value()) << text;
+    if (heading) {
+      EXPECT_DOUBLE_EQ(*back.heading_deg, *heading);
+    }
+  }
+  // A heading outside [0, 360) is named.
+  auto bad = BackseatCodec{}.decode(asBytes(encodeBackseat(BackseatOther{"BPGHP", {"000140.00", "9", "4200.000741", "N",
+                                                                                   "07059.999259", "W", "2.50", "0.25",
+                                                                                   "360.5"}})));
+  ASSERT_TRUE(bad.isBad());
+  EXPECT_NE(bad.reason().find("heading"), std::string::npos) << bad.reason();
+}
+
+TEST(LocalTangentPlaneTest, DegreeLengthsMatchWgs84TablesAndRoundTrip) {
+  auto ltp = LocalTangentPlane::create({42.0, -71.0});
+  ASSERT_TRUE(ltp.ok());
+  // WGS84 lengths of a degree by the usual series (e.g. the NGA/Wikipedia "length of a degree"
+  // expansions), independent of the closed form in the plane: at 42 deg about 111 073 m of
+  // latitude and 82 850 m of longitude.
+  const double phi = 42.0 * std::numbers::pi / 180.0;
+  const double lat_m = 111'132.954 - 559.822 * std::cos(2 * phi) + 1.175 * std::cos(4 * phi);
+  const double lon_m = 111'412.84 * std::cos(phi) - 93.5 * std::cos(3 * phi) + 0.118 * std::cos(5 * phi);
+  EXPECT_NEAR(ltp->metresPerDegreeLatitude(), lat_m, 1.0);
+  EXPECT_NEAR(ltp->metresPerDegreeLongitude(), lon_m, 1.0);
+  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0, 0), Eigen::Vector2d(-5.25, 3.5), Eigen::Vector2d(812.0, -9000.0)}) {
+    const GeoPoint g = ltp->toGeo(xy);
+    EXPECT_LT((ltp->toLocal(g) - xy).norm(), 1e-6);
+  }
+  const GeoPoint north = ltp->toGeo(Eigen::Vector2d(0.0, 1852.0));  // one nautical mile north
+  EXPECT_NEAR((north.latitude_deg - 42.0) * 60.0, 1.0, 0.01);       // = one minute of latitude
+  EXPECT_FALSE(LocalTangentPlane::create({85.0, 0.0}).ok());
+  EXPECT_FALSE(LocalTangentPlane::create({0.0, 181.0}).ok());
+  EXPECT_FALSE(LocalTangentPlane::create({std::nan(""), 0.0}).ok());
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <memory>
 #include <map>
 #include <optional>
+#include <numbers>
 
 #include "pump.hpp"
 #include "test_support.hpp"
@@ -32,11 +33,14 @@
 #include "vog/sim/world.hpp"
 #include "vog/sonar/range_extraction.hpp"
 #include "vog/sonar/sonar_udp.hpp"
-#include "vog/vehicle/local_tangent_plane.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
 #include "vog/vehicle/sim_vehicle.hpp"
 
 namespace vog::vehicle {
 namespace {
+
+using backseat::GeoPoint;
+using backseat::LocalTangentPlane;
 
 using namespace std::chrono_literals;
 
@@ -201,7 +205,7 @@ struct Bench {
   }
 
   // Sends $BPGHP to the world point (x, y, z) through the tracker; returns the sentence's id.
-  std::uint32_t goTo(const Eigen::Vector3d& xyz) {
+  std::uint32_t goTo(const Eigen::Vector3d& xyz, std::optional<double> heading_deg = std::nullopt) {
     backseat::WaypointCommand w;
     w.id = ++next_id;
     const GeoPoint g = ltp->toGeo(xyz.head<2>());
@@ -209,7 +213,8 @@ struct Bench {
     w.longitude_deg = g.longitude_deg;
     w.depth_m = -xyz.z();
     w.speed_mps = 0.25;
-    // What the vehicle receives: the position at the sentence's ddmm.mmmm resolution (0.19 m).
+    w.heading_deg = heading_deg;
+    // What the vehicle receives: the position at the sentence's resolution (1e-6' = 2 mm).
     const std::string text = backseat::encodeBackseat(w);
     auto r = backseat::BackseatCodec{}.decode(
         std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
@@ -218,7 +223,7 @@ struct Bench {
       const auto& q = std::get<backseat::WaypointCommand>(r.frame());
       const Eigen::Vector2d xy = ltp->toLocal({q.latitude_deg, q.longitude_deg});
       expected[w.id] = Eigen::Vector3d(xy.x(), xy.y(), -q.depth_m);
-      EXPECT_LT((expected[w.id] - xyz).norm(), 0.2);
+      EXPECT_LT((expected[w.id] - xyz).norm(), 0.005);
     }
     auto line = tracker.send(w, now());
     EXPECT_TRUE(line.ok());
@@ -297,7 +302,7 @@ TEST(SimVehicleTest, RealDriversDecodeEveryDeviceAndDeadReckoningTracksTruth) {
     max_dr_error_m = std::max(max_dr_error_m, e);
     ++compared;
     if (!sent_second && (b.vehicle->snapshot().truth.xyz_world - b.expected[id1]).norm() < 0.02) {
-      id2 = b.goTo(second);
+      id2 = b.goTo(second, 30.0);  // and face 30 deg east of north on the way
       sent_second = true;
     }
   }
@@ -306,13 +311,15 @@ TEST(SimVehicleTest, RealDriversDecodeEveryDeviceAndDeadReckoningTracksTruth) {
   EXPECT_EQ(b.ackOf(id2)->status, backseat::AckStatus::kAccepted);
 
   const VehicleSnapshot snap = b.vehicle->snapshot();
-  // The vehicle steers on its navigation estimate (odometry drift is millimetres here).
+  // The vehicle steers on its navigation estimate (odometry drift is millimetres here), and holds
+  // the commanded heading: 30 deg east of north is a world yaw of 60 deg.
   EXPECT_LT((snap.truth.xyz_world - b.expected[id2]).norm(), 0.02);
+  EXPECT_NEAR(geometry::wrapAngle(snap.truth.yaw_rad - 60.0 * std::numbers::pi / 180.0), 0.0, 0.02);
   EXPECT_EQ(snap.commands_accepted, 2u);
-  // The vehicle's own navigation as decoded from $BFNVG (ddmm.mmmm: 0.19 m resolution).
+  // The vehicle's own navigation as decoded from $BFNVG (2 mm resolution; odometry drift is millimetres).
   ASSERT_TRUE(b.last_nvg.has_value());
   const Eigen::Vector2d nvg_xy = b.ltp->toLocal({b.last_nvg->latitude_deg, b.last_nvg->longitude_deg});
-  EXPECT_LT((nvg_xy - second.head<2>()).norm(), 0.2);
+  EXPECT_LT((nvg_xy - second.head<2>()).norm(), 0.05);
   EXPECT_NEAR(b.last_nvg->depth_m, 2.0, 0.05);
 
   // Dead reckoning: DVL at 5 Hz (mm/s on the wire) stamped by its clock, IMU attitude (1e-4 rad)

@@ -1,5 +1,5 @@
 // Parts of the simulated vehicle that need no running simulation: control command parsing, the
-// local tangent plane, the endpoints file and the configuration checks.
+// endpoints file and the configuration checks.
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,6 @@
 #include "test_support.hpp"
 #include "vog/vehicle/control.hpp"
 #include "vog/vehicle/endpoints.hpp"
-#include "vog/vehicle/local_tangent_plane.hpp"
 #include "vog/vehicle/sim_vehicle.hpp"
 
 namespace vog::vehicle {
@@ -57,28 +56,6 @@ TEST(VehicleControlTest, BadLinesNameWhatIsWrong) {
     ASSERT_FALSE(c.ok()) << line;
     EXPECT_NE(c.error().message.find(expected), std::string::npos) << line << " -> " << c.error().message;
   }
-}
-
-TEST(LocalTangentPlaneTest, DegreeLengthsMatchWgs84TablesAndRoundTrip) {
-  auto ltp = LocalTangentPlane::create({42.0, -71.0});
-  ASSERT_TRUE(ltp.ok());
-  // WGS84 lengths of a degree by the usual series (e.g. the NGA/Wikipedia "length of a degree"
-  // expansions), independent of the closed form in the plane: at 42 deg about 111 073 m of
-  // latitude and 82 850 m of longitude.
-  const double phi = 42.0 * std::numbers::pi / 180.0;
-  const double lat_m = 111'132.954 - 559.822 * std::cos(2 * phi) + 1.175 * std::cos(4 * phi);
-  const double lon_m = 111'412.84 * std::cos(phi) - 93.5 * std::cos(3 * phi) + 0.118 * std::cos(5 * phi);
-  EXPECT_NEAR(ltp->metresPerDegreeLatitude(), lat_m, 1.0);
-  EXPECT_NEAR(ltp->metresPerDegreeLongitude(), lon_m, 1.0);
-  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0, 0), Eigen::Vector2d(-5.25, 3.5), Eigen::Vector2d(812.0, -9000.0)}) {
-    const GeoPoint g = ltp->toGeo(xy);
-    EXPECT_LT((ltp->toLocal(g) - xy).norm(), 1e-6);
-  }
-  const GeoPoint north = ltp->toGeo(Eigen::Vector2d(0.0, 1852.0));  // one nautical mile north
-  EXPECT_NEAR((north.latitude_deg - 42.0) * 60.0, 1.0, 0.01);       // = one minute of latitude
-  EXPECT_FALSE(LocalTangentPlane::create({85.0, 0.0}).ok());
-  EXPECT_FALSE(LocalTangentPlane::create({0.0, 181.0}).ok());
-  EXPECT_FALSE(LocalTangentPlane::create({std::nan(""), 0.0}).ok());
 }
 
 TEST(EndpointsFileTest, RoundTripsEveryFieldAndLeavesNoTemporaryFile) {

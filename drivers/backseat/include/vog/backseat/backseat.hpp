@@ -9,7 +9,10 @@
 //           depth, attitude in degrees, time the solution was computed)
 //   $BFNVR,hhmmss.ss,east_mps,north_mps,down_mps,pitch_rate_dps,roll_rate_dps,yaw_rate_dps
 //   $BFACK,hhmmss.ss,NAME,hhmmss.ss,id,status,reason        (status 1 accepted, 0 failed)
-//   $BPGHP,hhmmss.ss,id,ddmm.mmmm,N|S,dddmm.mmmm,E|W,depth_m,speed_mps   (go to position)
+//   $BPGHP,hhmmss.ss,id,ddmm.mmmm,N|S,dddmm.mmmm,E|W,depth_m,speed_mps[,heading_deg]   (go to position;
+//          the optional heading, true degrees in [0, 360), is held on arrival and turned to while
+//          moving; without it the vehicle chooses its heading)
+// Positions are written with 6 decimals of minutes (2 mm) and read with any number of decimals.
 //   $BPSTS,hhmmss.ss,state,text                               (payload heartbeat, every 1 s)
 // Other $BF sentences are kept as raw fields (BackseatOther) so nothing is lost.
 
@@ -17,6 +20,7 @@
 #include "vog/geometry/result.hpp"
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -74,6 +78,7 @@ struct WaypointCommand {  // $BPGHP
   double longitude_deg = 0.0;
   double depth_m = 0.0;
   double speed_mps = 0.0;
+  std::optional<double> heading_deg;  // true heading to hold, [0, 360); none: the vehicle's choice
 };
 
 struct Heartbeat {  // $BPSTS

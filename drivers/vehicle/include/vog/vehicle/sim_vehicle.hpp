@@ -15,8 +15,10 @@
 // target at once (no queue). The target is given in the vehicle's navigation frame (the one its
 // $BFNVG reports, which drifts from the truth by the odometry error); it is mapped into the true
 // world with the navigation error at the time of the command, so the vehicle ends where its own
-// navigation says the target is. The vehicle turns to face the target while it moves when the
-// target is more than `face_target_min_distance_m` away horizontally, else it keeps its heading.
+// navigation says the target is. With the optional heading field the vehicle turns to that heading
+// (also a navigation-frame value) while it moves and holds it on arrival; without it, it turns to
+// face the target while it moves when the target is more than `face_target_min_distance_m` away
+// horizontally, else it keeps its heading.
 // The speed field is capped by the vehicle's speed limit (slower speeds are not modelled). A
 // command is rejected ($BFACK status 0 with the reason) when a value is not finite, the depth is
 // negative, or the target is more than `operating_margin_m` outside the scene's box. A move the

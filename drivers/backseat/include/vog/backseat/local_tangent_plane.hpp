@@ -1,17 +1,17 @@
 #pragma once
-// Latitude/longitude <-> the simulator's world frame (x east, y north, metres) for the backseat
-// sentences, which carry positions as ddmm.mmmm (PROTOCOLS.md, HAUV backseat).
+// Latitude/longitude <-> a local world frame (x east, y north, metres) for the backseat sentences,
+// which carry positions as ddmm.mmmm (PROTOCOLS.md, HAUV backseat).
 //
 // A local tangent plane at an origin: north = (lat - lat0) * M(lat0), east = (lon - lon0) * N(lat0)
 // cos(lat0), with M and N the WGS84 meridional and prime-vertical radii of curvature at the origin
 // (the flat-earth approximation; over the few hundred metres of a harbour survey its error is far
-// below the 0.0001' = 0.19 m resolution of the sentences). The two directions are exact inverses.
+// below the 1e-6' = 2 mm resolution of the sentences). The two directions are exact inverses.
 
 #include "vog/geometry/result.hpp"
 
 #include <Eigen/Core>
 
-namespace vog::vehicle {
+namespace vog::backseat {
 
 struct GeoPoint {
   double latitude_deg = 0.0;
@@ -39,4 +39,4 @@ class LocalTangentPlane {
   double m_per_deg_lon_;
 };
 
-}  // namespace vog::vehicle
+}  // namespace vog::backseat

@@ -1,10 +1,10 @@
-#include "vog/vehicle/local_tangent_plane.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
 
 #include <cmath>
 #include <numbers>
 #include <string>
 
-namespace vog::vehicle {
+namespace vog::backseat {
 
 Result<LocalTangentPlane> LocalTangentPlane::create(GeoPoint origin) {
   if (!std::isfinite(origin.latitude_deg) || std::abs(origin.latitude_deg) > 80.0)
@@ -32,4 +32,4 @@ Eigen::Vector2d LocalTangentPlane::toLocal(const GeoPoint& point) const {
                          (point.latitude_deg - origin_.latitude_deg) * m_per_deg_lat_);
 }
 
-}  // namespace vog::vehicle
+}  // namespace vog::backseat
