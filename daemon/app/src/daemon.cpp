@@ -1,6 +1,7 @@
 #include "vog/app/daemon.hpp"
 
 #include "vog/app/scan_record.hpp"
+#include "vog/app/device_source.hpp"
 #include "vog/app/sim_source.hpp"
 #include "vog/map/voxel_key.hpp"
 
@@ -52,12 +53,6 @@ mission::MissionCommandKind toMission(api::MissionCommand::Kind k) {
 plan::Waypoint toWaypoint(const Pose3& T) { return {T.translation(), geometry::yawOf(T.linear())}; }
 Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
   return geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
-}
-// Yaw and translation of T (roll and pitch dropped): depth, roll and pitch are measured absolutely,
-// so two odometry frames differ by a planar motion only.
-Pose3 planar(const Pose3& T) {
-  const Eigen::Vector3d t = T.translation();
-  return geometry::poseFromXyzRpy(t.x(), t.y(), 0.0, 0.0, 0.0, geometry::yawOf(T.linear()));
 }
 
 class SpdlogApiLogger final : public api::ApiLogger {
@@ -142,6 +137,7 @@ Status Daemon::init() {
     mission_ = mission::MissionControl(mission::Box{config_.mission.box_min_m, config_.mission.box_max_m}, s);
     mission_started_ = s == mission::MissionState::kExploring || s == mission::MissionState::kReturning ||
                        s == mission::MissionState::kPaused;
+    mapping_enabled_ = mission_started_;
   }
   std::optional<Pose3> sim_start;
   if (resumed) {
@@ -152,7 +148,7 @@ Status Daemon::init() {
                                     : last.T_world_base;
     T_map_home_ = pipeline_->submaps().front().T_world_base;
     pipeline_last_stamp_ns_ = last.last_stamp_ns;
-    sim_start = planar(*T_map_resume_) * Pose3(Eigen::Translation3d(0, 0, T_map_resume_->translation().z()));
+    sim_start = geometry::planarPart(*T_map_resume_) * Pose3(Eigen::Translation3d(0, 0, T_map_resume_->translation().z()));
     spdlog::info("mission {}: resumed {} submaps, {} loop closures, state {}", mission_dir_.string(),
                  pipeline_->submaps().size(), pipeline_->closures().size(), mission::toString(mission_.state()));
   } else {
@@ -180,10 +176,11 @@ Status Daemon::init() {
   if (config_.source == Source::kSim) {
     auto source = SimSource::create(config_.sim, sim_start);
     if (!source) return source.error();
-    if (!resumed) T_map_home_ = (*source)->startPose();
     source_ = std::move(source).value();
   } else {
-    return Error{"source: devices: the device backend is not part of this build; use source: sim"};
+    auto source = DeviceSource::create(config_.devices);
+    if (!source) return source.error();
+    source_ = std::move(source).value();
   }
 
   api::ApiServerConfig ac;
@@ -204,21 +201,31 @@ Status Daemon::init() {
 
 void Daemon::onOdometry(const OdometrySample& odometry) {
   const std::lock_guard lock(state_mutex_);
-  if (T_map_resume_ && !T_oldodom_newodom_) {
-    // First sample after a resume: the vehicle is where it was last sent, in the old odometry frame.
-    const Pose3 T_oldodom_vehicle = T_map_odom_.inverse() * *T_map_resume_;
-    T_oldodom_newodom_ = planar(T_oldodom_vehicle) * planar(odometry.T_odom_vehicle).inverse();
+  if (T_map_resume_ && !have_odometry_) {
+    // First sample after a resume. A source with a new frame (the simulator): the vehicle is where
+    // it was last sent, in the old odometry frame. A persistent frame continues as it is.
+    if (!source_->persistentFrame()) {
+      const Pose3 T_oldodom_vehicle = T_map_odom_.inverse() * *T_map_resume_;
+      T_oldodom_newodom_ = geometry::planarPart(T_oldodom_vehicle) * geometry::planarPart(odometry.T_odom_vehicle).inverse();
+    }
     // A source whose clock restarted (the simulator) continues after the last mapped stamp.
     const std::int64_t last_ns = pipeline_last_stamp_ns_;
     if (odometry.stamp_ns <= last_ns) stamp_offset_ns_ = last_ns - odometry.stamp_ns + 1'000'000'000;
     if (stamp_offset_ns_ != 0) spdlog::info("source clock restarted: stamps shifted by {} ns", stamp_offset_ns_);
   }
+  have_odometry_ = true;
   odometry_ = odometry;
   odometry_.stamp_ns += stamp_offset_ns_;
   if (T_oldodom_newodom_) odometry_.T_odom_vehicle = *T_oldodom_newodom_ * odometry.T_odom_vehicle;
 }
 
 bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_world_vehicle_true) {
+  if (config_.source == Source::kDevices && !chunk_gate_) {
+    // Outside a mission (idle, complete, aborted) nothing is mapped; the raw log has the bytes.
+    const std::lock_guard lock(queue_mutex_);
+    ++scans_not_mapped_;
+    return !stopping_.load();
+  }
   slam::ScanInput aligned = scan;
   {
     const std::lock_guard lock(state_mutex_);
@@ -234,10 +241,38 @@ bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_w
   return true;
 }
 
+void Daemon::onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) {
+  chunk_gate_ = mappingGate(stamp_ns);
+  recordRaw(device_id, stamp_ns, bytes);
+}
+
+bool Daemon::mappingGate(std::int64_t stamp_ns) {
+  const bool gate = mapping_enabled_.load();
+  if (logged_gate_ != gate) {
+    const std::uint8_t byte = gate ? 1 : 0;
+    recordRaw(kMappingGateDeviceId, stamp_ns, std::span<const std::uint8_t>(&byte, 1));
+    logged_gate_ = gate;
+  }
+  return gate;
+}
+
+void Daemon::recordRaw(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) {
+  const std::lock_guard lock(raw_log_mutex_);
+  if (raw_log_failed_) return;
+  if (Status st = raw_log_->append(device_id, stamp_ns, bytes); !st) {
+    spdlog::error("raw log: {} (recording stops; mapping goes on)", st.error().message);
+    raw_log_failed_ = true;
+  }
+}
+
+Status Daemon::syncRawLog() {
+  const std::lock_guard lock(raw_log_mutex_);
+  return raw_log_->sync();
+}
+
 // ---------------------------------------------------------------- mapping thread
 
 void Daemon::mappingLoop() {
-  bool raw_log_failed = false;
   while (true) {
     ++mapping_beat_;
     QueuedScan item;
@@ -251,15 +286,20 @@ void Daemon::mappingLoop() {
       queue_cv_.notify_all();
     }
     const slam::ScanInput& scan = item.scan;
-    if (!raw_log_failed) {
-      Status st = raw_log_->append(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
-      if (st && item.T_world_vehicle_true)
-        st = raw_log_->append(kSimTruthDeviceId, scan.scan.stamp_ns,
-                              encodeTruthRecord({scan.scan.stamp_ns, *item.T_world_vehicle_true}));
-      if (!st) {
-        spdlog::error("raw log: {} (recording stops; mapping goes on)", st.error().message);
-        raw_log_failed = true;
-      }
+    bool mapped = true;
+    if (config_.source == Source::kSim) {
+      // The simulator's "device" output is the scan itself (scan_record.hpp), with its true pose.
+      mapped = mappingGate(scan.scan.stamp_ns);
+      recordRaw(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
+      if (item.T_world_vehicle_true)
+        recordRaw(kSimTruthDeviceId, scan.scan.stamp_ns, encodeTruthRecord({scan.scan.stamp_ns, *item.T_world_vehicle_true}));
+    }
+    if (!mapped) {
+      const std::lock_guard lock(queue_mutex_);
+      ++scans_not_mapped_;
+      --scans_unmapped_;
+      queue_cv_.notify_all();
+      continue;
     }
     auto update = pipeline_->feed(scan);
     if (!update) {
@@ -286,14 +326,14 @@ void Daemon::mappingLoop() {
       if (auto st = persistUpdate(*update); !st) spdlog::error("mission store at shutdown: {}", st.error().message);
     }
   }
-  if (auto st = raw_log_->sync(); !st) spdlog::error("raw log: {}", st.error().message);
+  if (auto st = syncRawLog(); !st) spdlog::error("raw log: {}", st.error().message);
 }
 
 Status Daemon::persistUpdate(const slam::MappingUpdate& update) {
   // Durable first (the journal group is the commit), then visible to the merge and the API.
   if (update.closed_submap) {
     if (auto st = store_->onUpdate(*pipeline_, update); !st) return st;
-    if (auto st = raw_log_->sync(); !st) return st;
+    if (auto st = syncRawLog(); !st) return st;
     spdlog::info("submap {} closed ({} scans){}", *update.closed_submap, pipeline_->submaps().back().n_scans,
                  update.closures.empty() ? "" : ", " + std::to_string(update.closures.size()) + " loop closures");
   }
@@ -353,6 +393,8 @@ Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, s
 }
 
 void Daemon::recordStateLocked(mission::MissionState state) {
+  mapping_enabled_ = state == mission::MissionState::kExploring || state == mission::MissionState::kReturning ||
+                     state == mission::MissionState::kPaused;
   spdlog::info("mission: {}{}", mission::toString(state),
                state == mission::MissionState::kAborted ? " (" + mission_.reason() + ")" : std::string());
   if (auto st = store_->onState({odometry_.stamp_ns, state}); !st) spdlog::error("mission store: {}", st.error().message);
@@ -403,7 +445,8 @@ void Daemon::planningLoop() {
                                                                                 : api::PlannerState::kIdle;
         continue;
       }
-      start_now = std::exchange(mission_started_, false);
+      // A mission starts once navigation is up: its home and first waypoints are the vehicle's pose.
+      start_now = have_odometry_ && std::exchange(mission_started_, false);
       returning = mission_.state() == mission::MissionState::kReturning;
       home_sent = home_path_sent_;
       n_submaps = submap_infos_ ? submap_infos_->size() : 0;
@@ -411,6 +454,7 @@ void Daemon::planningLoop() {
       stamp = odometry_.stamp_ns;
     }
     if (start_now) {
+      if (n_submaps == 0) T_map_home_ = T_now;  // home is where a new mission starts
       plan::PlannerConfig pc = config_.planner;
       const mission::Box box = *mission_.box();
       pc.box_min_world_m = box.min_world_m;

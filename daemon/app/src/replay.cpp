@@ -1,10 +1,13 @@
 #include "vog/app/replay.hpp"
 
+#include "vog/app/device_feed.hpp"
 #include "vog/app/scan_record.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/mission/mission_store.hpp"
 #include "vog/mission/raw_log.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
+
+#include <optional>
 
 namespace vog::app {
 
@@ -21,6 +24,15 @@ Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesyste
   auto pipeline = slam::MappingPipeline::create(config.mapping);
   if (!pipeline) return Error{"replay: mapping: " + pipeline.error().message};
 
+  // Device records go through the live run's decoder (source: devices).
+  std::optional<DeviceFeed> feed;
+  if (config.source == Source::kDevices) {
+    auto f = DeviceFeed::create(config.devices.feed);
+    if (!f) return Error{"replay: devices: " + f.error().message};
+    feed.emplace(std::move(f).value());
+  }
+  FeedOutput decoded;
+
   ReplayStats stats;
   auto persist = [&](const Result<slam::MappingUpdate>& update) -> Status {
     if (!update) {
@@ -29,14 +41,38 @@ Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesyste
     }
     return (*store)->onUpdate(**pipeline, *update);
   };
+  bool gate = true;  // scans are mapped unless a gate record says otherwise (scan_record.hpp)
   for (const mission::RawRecord& record : raw->records) {
     if (record.device_id == kSimTruthDeviceId) continue;  // evaluation records, not inputs
+    if (record.device_id == kMappingGateDeviceId) {
+      if (record.bytes.size() != 1 || record.bytes[0] > 1)
+        return Error{"replay: mapping gate record at " + std::to_string(record.stamp_ns) + " ns is malformed"};
+      gate = record.bytes[0] == 1;
+      continue;
+    }
+    if (const std::optional<DeviceId> device = deviceIdFromRaw(record.device_id); device && feed) {
+      decoded.clear();
+      feed->feed(*device, record.stamp_ns, record.bytes, decoded);
+      for (const slam::ScanInput& scan : decoded.scans) {
+        if (!gate) {
+          ++stats.not_mapped;
+          continue;
+        }
+        ++stats.scans;
+        if (auto st = persist((*pipeline)->feed(scan)); !st) return st.error();
+      }
+      continue;
+    }
     if (record.device_id != kSimScanDeviceId) {
       ++stats.skipped_records;
       continue;
     }
     auto scan = decodeScanRecord(record.bytes);
     if (!scan) return Error{"replay: record at " + std::to_string(record.stamp_ns) + " ns: " + scan.error().message};
+    if (!gate) {
+      ++stats.not_mapped;
+      continue;
+    }
     ++stats.scans;
     if (auto st = persist((*pipeline)->feed(*scan)); !st) return st.error();
   }

@@ -2,6 +2,7 @@
 
 #include "vog/app/config_reader.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -129,20 +130,33 @@ void readNav(ConfigMap m, nav::DeadReckoningConfig& c) {
 }
 
 void readDevices(ConfigMap m, DevicesSection& d) {
+  DeviceFeedConfig& f = d.feed;
+  m.number("time_scale", d.time_scale, 0.01, 1000.0);
+  std::string navigation = f.navigation == NavigationSource::kBackseat ? "backseat" : "dead_reckoning";
+  m.choice("navigation", navigation, {"dead_reckoning", "backseat"});
+  f.navigation = navigation == "backseat" ? NavigationSource::kBackseat : NavigationSource::kDeadReckoning;
   ConfigMap dvl = m.map("dvl");
   dvl.boolean("enabled", d.dvl_enabled);
-  dvl.choice("format", d.dvl_format, {"pd0", "pd6"});
+  std::string format = f.dvl_format == DvlFormat::kPd6 ? "pd6" : "pd0";
+  dvl.choice("format", format, {"pd0", "pd6"});
+  f.dvl_format = format == "pd6" ? DvlFormat::kPd6 : DvlFormat::kPd0;
   readSerial(dvl, d.dvl);
   dvl.finish();
   ConfigMap depth = m.map("depth");
   depth.boolean("enabled", d.depth_enabled);
-  depth.number("latitude_deg", d.depth_latitude_deg, -90.0, 90.0);
+  depth.number("latitude_deg", f.depth.latitude_deg, -90.0, 90.0);
+  depth.integer("units_code", f.depth.units_code, 0, 8);
+  depth.number("atmospheric_pressure_pa", f.depth.atmospheric_pressure_pa, 0.0, 2e5);
+  depth.boolean("reading_is_absolute", f.depth.reading_is_absolute);
   readSerial(depth, d.depth);
   depth.finish();
   ConfigMap imu = m.map("imu");
   imu.boolean("enabled", d.imu_enabled);
   imu.text("can_interface", d.imu.interface);
   imu.text("unix_seqpacket", d.imu.unix_seqpacket);
+  std::uint64_t base_id = f.imu.base_id;
+  imu.unsignedInteger("base_id", base_id, 0, 0x7FC);
+  f.imu.base_id = static_cast<canid_t>(base_id);
   readReconnect(imu.map("reconnect"), d.imu.reconnect);
   if (!d.imu.interface.empty() && !d.imu.unix_seqpacket.empty())
     imu.fail("unix_seqpacket", "give either can_interface or unix_seqpacket, not both");
@@ -152,19 +166,32 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   sonar.text("bind_address", d.sonar.bind_address);
   readPort(sonar, "port", d.sonar.port, 0);
   ConfigMap ex = sonar.map("range_extraction");
-  ex.boolean("median_denoise", d.range_extraction.median_denoise);
-  ex.number("noise_floor_percentile", d.range_extraction.noise_floor_percentile, 0.0, 1.0);
-  ex.number("threshold_above_noise", d.range_extraction.threshold_above_noise, 0.0, 255.0);
-  ex.integer("min_run_samples", d.range_extraction.min_run_samples, 1, 1000);
-  ex.number("min_range_m", d.range_extraction.min_range_m, 0.0, 100.0);
-  ex.number("max_range_m", d.range_extraction.max_range_m, 0.0, kInf);
+  sonar::RangeExtractionConfig& r = f.range_extraction;
+  ex.boolean("median_denoise", r.median_denoise);
+  ex.number("noise_floor_percentile", r.noise_floor_percentile, 0.0, 1.0);
+  ex.number("threshold_above_noise", r.threshold_above_noise, 0.0, 255.0);
+  ex.integer("min_run_samples", r.min_run_samples, 1, 1000);
+  ex.number("min_range_m", r.min_range_m, 0.0, 100.0);
+  ex.number("max_range_m", r.max_range_m, 0.0, kInf);
   ex.finish();
   sonar.finish();
   ConfigMap bs = m.map("backseat");
+  WaypointFollowerConfig& w = d.follower;
   bs.boolean("enabled", d.backseat_enabled);
   bs.text("address", d.backseat.address);
   readPort(bs, "port", d.backseat.port, 1);
   readReconnect(bs.map("reconnect"), d.backseat.reconnect);
+  bs.number("origin_latitude_deg", f.origin.latitude_deg, -80.0, 80.0);
+  bs.number("origin_longitude_deg", f.origin.longitude_deg, -180.0, 180.0);
+  bs.boolean("align_dead_reckoning", f.align_to_vehicle);
+  bs.number("max_extrapolation_s", f.backseat_max_extrapolation_s, 0.0, 10.0);
+  bs.number("arrival_tolerance_m", w.arrival_tolerance_m, 0.001, 10.0);
+  bs.degrees("arrival_tolerance_deg", w.arrival_tolerance_rad, 0.01, 180.0);
+  bs.number("arrival_max_speed_mps", w.arrival_max_speed_mps, 0.001, 10.0);
+  double resend_s = 1e-9 * static_cast<double>(w.ack.resend_after_ns);
+  bs.number("resend_after_s", resend_s, 0.1, 600.0);
+  w.ack.resend_after_ns = std::llround(resend_s * 1e9);
+  bs.integer("max_attempts", w.ack.max_attempts, 1, 100);
   bs.finish();
   ConfigMap aux = m.map("aux");
   aux.boolean("enabled", d.aux_enabled);
@@ -246,6 +273,12 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   root.finish();
   if (Status s = (*reader)->status(); !s.ok()) return s.error();
 
+  // The device backend decodes with the nav section's dead reckoning and the mapping's fan; without
+  // a backseat there is no vehicle navigation to align to; waypoints go at the planner's speed.
+  c.devices.feed.nav = c.nav;
+  c.devices.feed.n_beams = c.mapping.builder.fan.n_beams;
+  if (!c.devices.backseat_enabled) c.devices.feed.align_to_vehicle = false;
+  c.devices.follower.speed_mps = c.planner.v_max_mps;
   // The exploration box goes to the planner; cross-field rules of each component.
   c.planner.box_min_world_m = c.mission.box_min_m;
   c.planner.box_max_world_m = c.mission.box_max_m;
@@ -258,11 +291,17 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
     if (d.dvl_enabled) checks.push_back(d.dvl.validate("devices.dvl"));
     if (d.depth_enabled) checks.push_back(d.depth.validate("devices.depth"));
     if (d.imu_enabled) checks.push_back(d.imu.validate("devices.imu"));
-    if (d.sonar_enabled) {
-      checks.push_back(d.sonar.validate("devices.sonar"));
-      checks.push_back(named("devices.sonar.range_extraction", d.range_extraction));
+    if (d.sonar_enabled) checks.push_back(d.sonar.validate("devices.sonar"));
+    if (d.backseat_enabled) {
+      checks.push_back(d.backseat.validate("devices.backseat"));
+      checks.push_back(d.follower.validate());
     }
-    if (d.backseat_enabled) checks.push_back(d.backseat.validate("devices.backseat"));
+    checks.push_back(d.feed.validate());
+    if (d.feed.navigation == NavigationSource::kBackseat && !d.backseat_enabled)
+      checks.push_back(Error{"devices.navigation: backseat needs devices.backseat.enabled"});
+    if (d.feed.navigation == NavigationSource::kDeadReckoning && !(d.dvl_enabled && d.imu_enabled && d.depth_enabled))
+      checks.push_back(Error{"devices.navigation: dead_reckoning needs the dvl, imu and depth devices enabled"});
+    if (!d.sonar_enabled) checks.push_back(Error{"devices.sonar: the sonar must be enabled (it is what is mapped)"});
     if (d.aux_enabled) checks.push_back(d.aux.validate("devices.aux"));
   }
   for (const Status& s : checks) {

@@ -73,8 +73,10 @@ int main(int argc, char** argv) {
       spdlog::error("{}", stats.error().message);
       return 1;
     }
-    spdlog::info("replayed {} scans: {} submaps, {} loop closures ({} records skipped, {} scans rejected); {}/map.bt",
-                 stats->scans, stats->submaps, stats->closures, stats->skipped_records, stats->rejected_scans, out_dir);
+    spdlog::info("replayed {} scans: {} submaps, {} loop closures ({} records skipped, {} scans rejected, {} outside the "
+                 "mission); {}/map.bt",
+                 stats->scans, stats->submaps, stats->closures, stats->skipped_records, stats->rejected_scans,
+                 stats->not_mapped, out_dir);
     return 0;
   }
 

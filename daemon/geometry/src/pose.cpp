@@ -29,6 +29,10 @@ Eigen::Vector3d rpyFromRotation(const Eigen::Matrix3d& R) {
 
 double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
 
+Pose3 planarPart(const Pose3& T) {
+  return poseFromXyzRpy(T.translation().x(), T.translation().y(), 0.0, 0.0, 0.0, yawOf(T.linear()));
+}
+
 bool isFinite(const Eigen::Vector3d& p) { return p.allFinite(); }
 
 bool isValidPose(const Pose3& T, double tolerance) {

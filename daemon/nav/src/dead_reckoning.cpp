@@ -269,4 +269,26 @@ NavSolution DeadReckoning::solution(std::int64_t now_ns) const {
   return s;
 }
 
+Result<geometry::Pose3> DeadReckoning::poseAt(std::int64_t stamp_ns) const {
+  if (last_dvl_ns_ < 0) return Error{"no dvl data yet"};
+  if (last_depth_ns_ < 0) return Error{"no depth data yet"};
+  const double dvl_age_s = seconds(stamp_ns - last_dvl_ns_);
+  if (std::abs(dvl_age_s) > config_.dvl_timeout_s) {
+    return Error{"newest dvl sample is " + fmt(dvl_age_s) + " s from the stamp (nav.dvl_timeout_s " +
+                 fmt(config_.dvl_timeout_s) + ")"};
+  }
+  const double depth_age_s = seconds(stamp_ns - last_depth_ns_);
+  if (std::abs(depth_age_s) > config_.depth_timeout_s) {
+    return Error{"newest depth sample is " + fmt(depth_age_s) + " s from the stamp (nav.depth_timeout_s " +
+                 fmt(config_.depth_timeout_s) + ")"};
+  }
+  Result<Eigen::Quaterniond> q = attitudeAt(stamp_ns);
+  if (!q.ok()) return Error{"attitude: " + q.error().message};
+  const Eigen::Vector2d xy = xy_m_ + dvl_age_s * v_world_mps_.head<2>();
+  geometry::Pose3 T = geometry::Pose3::Identity();
+  T.linear() = q->normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(xy.x(), xy.y(), -depth_m_);
+  return T;
+}
+
 }  // namespace vog::nav

@@ -282,6 +282,47 @@ TEST(DeadReckoningTest, StaleAndMissingSensorsDegradeWithReason) {
   EXPECT_NEAR(stale.T_world_vehicle.translation().z(), -2.0, 1e-12);
 }
 
+// Poses between DVL samples (a sonar ping): on the noiseless circle, poseAt() at the midpoint of
+// two DVL samples is within the straight-line extrapolation error of the truth, with the attitude
+// interpolated between IMU samples; stale or missing sensors are named.
+TEST(DeadReckoningTest, PoseAtAStampBetweenSamplesFollowsTheTrack) {
+  const Track tr;
+  DeadReckoning dr;
+  EXPECT_NE(dr.poseAt(0).error().message.find("no dvl data yet"), std::string::npos);
+  double worst_m = 0.0, worst_rad = 0.0;
+  for (int k = 0; k <= 2000; ++k) {
+    const double t = k * 0.01;
+    ASSERT_TRUE(dr.addImu(imuAt(tr, t)).ok());
+    if (k % 25 == 0) {
+      depth::DepthSample d;
+      d.stamp_ns = ns(t);
+      d.depth_m = tr.depth(t);
+      ASSERT_TRUE(dr.addDepth(d).ok());
+    }
+    if (k % 20 == 0) {
+      ASSERT_TRUE(dr.addDvl(pd0Ensemble(instrumentVelocity(tr, t), ns(t))).ok());
+    }
+    if (k % 20 == 10 && k > 100) {
+      // 0.1 s after the DVL sample, 5 ms after the newest IMU sample (held within imu_max_gap_s).
+      const double tp = t + 0.005;
+      auto T = dr.poseAt(ns(tp));
+      ASSERT_TRUE(T.ok()) << T.error().message;
+      worst_m = std::max(worst_m, (T->translation().head<2>() - tr.position(tp)).norm());
+      const Eigen::Matrix3d R_truth = worldFromNedAttitude(tr.roll(tp), tr.pitch(tp), tr.heading(tp));
+      worst_rad = std::max(worst_rad, Eigen::AngleAxisd(R_truth.transpose() * T->linear()).angle());
+      EXPECT_NEAR(T->translation().z(), -tr.depth(tp), 0.01);
+    }
+  }
+  // Extrapolating 0.105 s along the tangent: v^2 dt^2 / (2 r) is under 0.1 mm; the attitude is held 5 ms
+  // (the heading turns 0.05 rad/s).
+  EXPECT_LT(worst_m, 2e-3);
+  EXPECT_LT(worst_rad, 1e-3);
+  // A stamp beyond the DVL timeout (1 s) is refused, naming the DVL.
+  auto late = dr.poseAt(ns(20.0 + 1.5));
+  ASSERT_FALSE(late.ok());
+  EXPECT_NE(late.error().message.find("dvl"), std::string::npos) << late.error().message;
+}
+
 TEST(DeadReckoningTest, ConfigValidateNamesKey) {
   DeadReckoningConfig c;
   EXPECT_TRUE(c.validate().ok());

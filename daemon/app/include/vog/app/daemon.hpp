@@ -1,7 +1,8 @@
 #pragma once
 // Daemon: vogd's wiring (DESIGN "Threads in vogd"). One process, these threads:
 //   io        Asio io_context: the API server, signals (SIGTERM/SIGINT stop the daemon)
-//   source    the vehicle source (SimSource: the simulator) producing odometry and scans
+//   source    the vehicle source producing odometry and scans: SimSource (the simulator) or
+//             DeviceSource (the vehicle's devices on their own io_context; raw bytes to the raw log)
 //   mapping   scans -> MappingPipeline (submaps, loop closures, optimisation); every closed submap is
 //             made durable (MissionStore: .ot + journal group, fsync) before the merge hears of it
 //   merge     MergeWorker: keeps the merged map current and publishes immutable snapshots
@@ -83,6 +84,14 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   // --- SourceSink (source thread) ---
   void onOdometry(const OdometrySample& odometry) override;
   bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) override;
+  void onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) override;
+
+  // The raw log, written by the source thread (device bytes) or the mapping thread (simulator scans).
+  void recordRaw(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes);
+  // Whether inputs recorded now are mapped (mapping_enabled_), logged as a gate record when it
+  // changed since the last input; called by the thread that records the inputs, before recording.
+  bool mappingGate(std::int64_t stamp_ns);
+  Status syncRawLog();
 
   void mappingLoop();
   void planningLoop();
@@ -102,7 +111,13 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   // Components.
   std::unique_ptr<mission::MissionStore> store_;
-  std::unique_ptr<mission::RawLog> raw_log_;          // mapping thread
+  std::mutex raw_log_mutex_;
+  std::unique_ptr<mission::RawLog> raw_log_;          // guarded by raw_log_mutex_
+  bool raw_log_failed_ = false;                       // guarded by raw_log_mutex_
+  std::atomic<bool> mapping_enabled_{false};           // the mission is exploring, returning or paused
+  std::optional<bool> logged_gate_;                   // the input-writing thread only
+  bool chunk_gate_ = false;                           // source thread: the gate of the chunk being decoded
+  std::uint64_t scans_not_mapped_ = 0;                // outside a mission, guarded by queue_mutex_
   std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
   std::unique_ptr<plan::NbvPlanner> planner_;         // planning thread
@@ -132,6 +147,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::optional<geometry::Pose3> T_map_resume_;       // where the vehicle is taken to be at a resume
   std::int64_t pipeline_last_stamp_ns_ = 0;           // newest mapped stamp at a resume
   std::int64_t stamp_offset_ns_ = 0;                  // added to a restarted source's stamps
+  bool have_odometry_ = false;                         // a sample arrived since launch
   OdometrySample odometry_;                            // newest, aligned
   geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
   std::shared_ptr<const std::vector<api::SubmapInfo>> submap_infos_;

@@ -17,6 +17,11 @@ namespace vog::app {
 inline constexpr std::uint16_t kSimScanDeviceId = 0x0100;
 // The true vehicle pose of the scan with the same stamp (evaluation only): [i64 stamp_ns][f64 R x 9][f64 t x 3].
 inline constexpr std::uint16_t kSimTruthDeviceId = 0x0101;
+// The mapping gate: scans after this record are mapped ([u8 1]) or not ([u8 0]). vogd maps only
+// while a mission is exploring, returning or paused; the record is written by the thread that
+// writes the inputs, at the point where its decision changes, so a replay applies the same gate to
+// the same inputs. A log without one maps everything.
+inline constexpr std::uint16_t kMappingGateDeviceId = 0x0102;
 
 std::vector<std::uint8_t> encodeScanRecord(const slam::ScanInput& scan);
 // Errors name the problem (short, trailing bytes, beam count, non-finite pose).

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace vog::app {
@@ -33,6 +34,8 @@ class SourceSink {
   virtual ~SourceSink() = default;
   virtual void onOdometry(const OdometrySample& odometry) = 0;
   virtual bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) = 0;
+  // Bytes a device delivered, for the raw log, before they are decoded (device ids: device_feed.hpp).
+  virtual void onRawBytes(std::uint16_t /*device_id*/, std::int64_t /*stamp_ns*/, std::span<const std::uint8_t> /*bytes*/) {}
 };
 
 struct SourceWaypoint {
@@ -56,6 +59,10 @@ class VehicleSource {
   virtual std::uint64_t heartbeat() const = 0;
   // The source's own error (e.g. the simulator failed), if it stopped producing because of one.
   virtual Status failure() const = 0;
+  // True when the odometry frame outlives the daemon (the vehicle's own navigation frame): after a
+  // restart the new odometry continues the old frame. False (the simulator): a restarted source
+  // starts a new frame, aligned by the daemon at its first sample.
+  virtual bool persistentFrame() const { return false; }
 };
 
 }  // namespace vog::app

@@ -3,6 +3,8 @@
 // documents every key). Unknown keys and out-of-range values are rejected with file:line and the
 // allowed range (ConfigReader); each component's own validate() runs afterwards for cross-field rules.
 
+#include "vog/app/device_feed.hpp"
+#include "vog/app/waypoint_follower.hpp"
 #include "vog/geometry/result.hpp"
 #include "vog/io/can.hpp"
 #include "vog/io/modbus_client.hpp"
@@ -13,7 +15,6 @@
 #include "vog/nav/dead_reckoning.hpp"
 #include "vog/plan/planner_config.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
-#include "vog/sonar/range_extraction.hpp"
 
 #include <Eigen/Core>
 
@@ -43,21 +44,25 @@ struct SimSection {
 };
 
 struct DevicesSection {
+  // Stamps are the monotonic clock times this: 1 on a vehicle; a simulated vehicle that runs
+  // faster than real time (vogsim vehicle --speedup) sets its speed-up.
+  double time_scale = 1.0;
   bool dvl_enabled = true;
   io::SerialConfig dvl;
-  std::string dvl_format = "pd0";  // pd0 | pd6
   bool depth_enabled = true;
   io::SerialConfig depth;
-  double depth_latitude_deg = 42.0;
   bool imu_enabled = true;
   io::CanConfig imu;
   bool sonar_enabled = true;
   io::UdpReceiverConfig sonar;
-  sonar::RangeExtractionConfig range_extraction;
   bool backseat_enabled = true;
   io::TcpClientConfig backseat;
   bool aux_enabled = false;
   io::ModbusConfig aux;
+  // Decoding: DVL format, depth conversion, IMU ids, range extraction, navigation source, the
+  // backseat's origin. Its `nav` is the top-level nav section, its `n_beams` the mapping's fan.
+  DeviceFeedConfig feed;
+  WaypointFollowerConfig follower;  // waypoints over the backseat
 };
 
 struct ApiSection {

@@ -22,6 +22,10 @@ Eigen::Vector3d rpyFromRotation(const Eigen::Matrix3d& R);
 // Yaw of a rotation (heading of its x axis projected on the horizontal plane).
 double yawOf(const Eigen::Matrix3d& R);
 
+// The planar part of T: its x, y translation and yaw (z, roll and pitch dropped). Depth, roll and
+// pitch are measured absolutely, so two odometry or navigation frames differ by a planar motion.
+Pose3 planarPart(const Pose3& T);
+
 // True when every entry of the pose is finite and its rotation is orthonormal with det +1
 // (to a tolerance that admits accumulated rounding, not corrupted data).
 bool isValidPose(const Pose3& T, double tolerance = 1e-6);

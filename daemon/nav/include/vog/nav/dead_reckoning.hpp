@@ -86,6 +86,12 @@ class DeadReckoning {
   // Solution with sensor health evaluated at `now_ns` (the caller's newest sample time).
   NavSolution solution(std::int64_t now_ns) const;
 
+  // The pose at `stamp_ns` (e.g. of a sonar ping between two DVL samples): attitude interpolated
+  // from the IMU, x and y carried from the newest DVL sample with its velocity, z from the newest
+  // depth. An error names the sensor that cannot give it: no data yet, or data more than its
+  // timeout away from the stamp.
+  Result<geometry::Pose3> poseAt(std::int64_t stamp_ns) const;
+
   // Sets the horizontal position (e.g. from a surface fix) and resets its sigma.
   void resetPosition(double x_m, double y_m);
 

@@ -1,0 +1,149 @@
+#pragma once
+// DeviceFeed: the decoding half of vogd's device backend (`source: devices`). Every chunk a device
+// transport received, with its device and reception stamp, goes in; navigation (odometry) and sonar
+// scans with their poses come out. It reads no clock and does no I/O, so `vogd --replay` feeds the
+// raw log's records through the same object and gets the same scans, bit for bit.
+//
+//   dvl       PD0 ensembles (bottom track) or PD6 sentences      -> dead reckoning (x, y)
+//   imu       can_frame records (drivers/imu/README.md)          -> dead reckoning (attitude)
+//   depth     Digiquartz replies                                  -> dead reckoning (z, UNESCO 1983)
+//   sonar     fragment datagrams (sonar_udp.hpp) -> frame -> range extraction -> one scan per ping
+//   backseat  $BFNVG / $BFNVR (the vehicle's own navigation), $BFACK (acknowledgements)
+//
+// Navigation. `kDeadReckoning` (default): odometry is this daemon's dead reckoning from the raw
+// sensors; when `align_to_vehicle` is set its position starts at the vehicle's navigated position
+// (the first $BFNVG after dead reckoning is initialised), so the odometry frame is the vehicle's
+// navigation frame, the frame waypoints are sent in. `kBackseat`: odometry is the vehicle's own
+// solution from $BFNVG, interpolated to each ping.
+// Scans: a ping is stamped at the reception of its last fragment; its pose is the navigation at that
+// stamp. A ping without a pose (navigation not initialised or stale, not yet aligned) is dropped and
+// counted, never mapped with a guessed pose.
+//
+// Lifecycle: create() with a validated config; feed() in reception order. Invariants: outputs depend
+// only on the sequence of feed() calls; odometry stamps never decrease.
+
+#include "vog/app/vehicle_source.hpp"
+#include "vog/backseat/backseat.hpp"
+#include "vog/backseat/local_tangent_plane.hpp"
+#include "vog/codec/stream_decoder.hpp"
+#include "vog/depth/depth_types.hpp"
+#include "vog/depth/digiquartz.hpp"
+#include "vog/dvl/pd0.hpp"
+#include "vog/dvl/pd6.hpp"
+#include "vog/geometry/result.hpp"
+#include "vog/imu/imu_can.hpp"
+#include "vog/nav/dead_reckoning.hpp"
+#include "vog/slam/submap_builder.hpp"
+#include "vog/sonar/range_extraction.hpp"
+#include "vog/sonar/sonar_udp.hpp"
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace vog::app {
+
+// Raw-log device ids of the device backend (the simulator's records use 0x01xx, scan_record.hpp).
+enum class DeviceId : std::uint16_t { kDvl = 0x0001, kDepth = 0x0002, kImu = 0x0003, kSonar = 0x0004, kBackseat = 0x0005 };
+inline constexpr std::array<DeviceId, 5> kAllDevices = {DeviceId::kDvl, DeviceId::kDepth, DeviceId::kImu,
+                                                        DeviceId::kSonar, DeviceId::kBackseat};
+const char* toString(DeviceId device);
+std::optional<DeviceId> deviceIdFromRaw(std::uint16_t raw);
+
+enum class DvlFormat { kPd0, kPd6 };
+enum class NavigationSource { kDeadReckoning, kBackseat };
+
+struct DeviceFeedConfig {
+  DvlFormat dvl_format = DvlFormat::kPd0;
+  depth::DepthConversionConfig depth;
+  imu::ImuCanConfig imu;
+  sonar::RangeExtractionConfig range_extraction;
+  nav::DeadReckoningConfig nav;
+  NavigationSource navigation = NavigationSource::kDeadReckoning;
+  bool align_to_vehicle = true;  // dead reckoning starts at the first $BFNVG position
+  backseat::GeoPoint origin{42.0, -71.0};  // world (0, 0) of the backseat's latitude/longitude
+  int n_beams = 96;               // the mapping's fan; a frame with another beam count is refused
+  // kBackseat: a ping up to this long after the newest $BFNVG is extrapolated with $BFNVR's velocity.
+  double backseat_max_extrapolation_s = 0.5;
+
+  Status validate() const;
+};
+
+// The vehicle's navigation as its backseat reports it ($BFNVG, with $BFNVR's speed), world frame.
+struct VehicleNavigation {
+  std::int64_t stamp_ns = 0;
+  geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();
+  Eigen::Vector3d velocity_world_mps = Eigen::Vector3d::Zero();
+  int quality = 0;
+};
+
+struct FeedOutput {
+  std::vector<OdometrySample> odometry;
+  std::vector<slam::ScanInput> scans;
+  std::vector<backseat::AckSentence> acks;
+  std::optional<VehicleNavigation> vehicle_navigation;  // newest in this call
+  void clear();
+};
+
+struct DeviceCounters {
+  std::uint64_t chunks = 0;     // feed() calls
+  std::uint64_t messages = 0;   // decoded frames / sentences / samples
+  std::uint64_t rejected = 0;   // decoded but refused (bad frame, dead reckoning rejection, ...)
+  std::int64_t last_stamp_ns = -1;
+  std::string last_error;
+};
+
+class DeviceFeed {
+ public:
+  static Result<DeviceFeed> create(const DeviceFeedConfig& config);
+
+  // Outputs are appended to `out`.
+  void feed(DeviceId device, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes, FeedOutput& out);
+
+  const DeviceCounters& counters(DeviceId device) const;
+  // The odometry pose at a stamp (what a scan at that stamp is mapped with), or why there is none.
+  Result<geometry::Pose3> odometryPoseAt(std::int64_t stamp_ns) const;
+  // Bytes dropped by a device's stream decoder (garbage, bad checksums, overflow), for health.
+  std::uint64_t droppedBytes(DeviceId device) const;
+  nav::NavSolution deadReckoning(std::int64_t now_ns) const { return dead_reckoning_.solution(now_ns); }
+  bool aligned() const { return aligned_; }
+  std::uint64_t scans() const { return scans_; }
+  std::uint64_t scansDropped() const { return scans_dropped_; }
+  const std::string& lastDropReason() const { return last_drop_reason_; }
+
+ private:
+  DeviceFeed(const DeviceFeedConfig& config, backseat::LocalTangentPlane ltp)
+      : config_(config), ltp_(ltp), dead_reckoning_(config.nav) {}
+  DeviceCounters& counter(DeviceId device);
+  void reject(DeviceId device, const std::string& why);
+  void onDvlAccepted(std::int64_t stamp_ns, FeedOutput& out);
+  void onSonarFrame(const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out);
+  void onBackseat(backseat::BackseatSentence sentence, std::int64_t stamp_ns, FeedOutput& out);
+  Result<geometry::Pose3> backseatPoseAt(std::int64_t stamp_ns) const;
+  void emitOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out);
+
+  DeviceFeedConfig config_;
+  backseat::LocalTangentPlane ltp_;
+  nav::DeadReckoning dead_reckoning_;
+  codec::StreamDecoder<dvl::Pd0Codec> pd0_;
+  codec::StreamDecoder<dvl::Pd6Codec> pd6_;
+  codec::StreamDecoder<depth::DigiquartzCodec> depth_;
+  codec::StreamDecoder<imu::ImuCanCodec> imu_;
+  codec::StreamDecoder<backseat::BackseatCodec> backseat_;
+  sonar::FrameReassembler reassembler_{8};
+  std::array<DeviceCounters, kAllDevices.size()> counters_{};
+  std::deque<VehicleNavigation> vehicle_navigation_;  // the last two seconds of $BFNVG
+  Eigen::Vector3d vehicle_velocity_mps_ = Eigen::Vector3d::Zero();  // newest $BFNVR
+  bool aligned_ = false;
+  std::int64_t last_odometry_ns_ = -1;
+  std::int64_t last_pd6_stamp_ns_ = -1;
+  std::uint64_t scans_ = 0;
+  std::uint64_t scans_dropped_ = 0;
+  std::string last_drop_reason_;
+};
+
+}  // namespace vog::app
