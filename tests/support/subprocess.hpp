@@ -1,7 +1,7 @@
 #pragma once
 // A child process for bench and process tests: posix_spawn with extra environment variables and
 // stdout/stderr appended to a log file; waited for with a timeout; killed (SIGKILL) and reaped on
-// destruction if still running.
+// destruction if still running. And the line protocol of a child's control socket.
 
 #include <sys/types.h>
 
@@ -36,5 +36,9 @@ class Subprocess {
 
 // The whole content of a text file (empty if it cannot be read).
 std::string readTextFile(const std::filesystem::path& file);
+
+// One line to a child's Unix-domain control socket and its one-line reply (without the LF);
+// "connect failed" or the part read before the timeout when the child does not answer.
+std::string controlRequest(const std::filesystem::path& socket, const std::string& line, double timeout_s = 2.0);
 
 }  // namespace vog::test

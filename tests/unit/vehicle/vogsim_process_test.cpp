@@ -5,10 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <signal.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstring>
@@ -17,6 +13,7 @@
 #include <vector>
 
 #include "pump.hpp"
+#include "subprocess.hpp"
 #include "test_support.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/depth/digiquartz.hpp"
@@ -28,72 +25,16 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The child process; killed (SIGKILL) and reaped if a test ends without stopping it.
-class Child {
- public:
-  explicit Child(const std::vector<std::string>& args) {
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  pid_t pid() const { return pid_; }
-  // Polls for the exit until the deadline; the wait status, or nullopt on timeout.
-  std::optional<int> waitFor(std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return status;
-      }
-      std::this_thread::sleep_for(5ms);
-    }
-    return std::nullopt;
-  }
-
- private:
-  pid_t pid_ = -1;
-};
-
-std::string controlRoundTrip(const std::string& path, const std::string& line) {
-  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  std::strncpy(addr.sun_path, path.c_str(), sizeof(addr.sun_path) - 1);
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
-    ::close(fd);
-    return "connect failed";
-  }
-  const std::string out = line + "\n";
-  (void)!::write(fd, out.data(), out.size());
-  std::string reply;
-  char c = 0;
-  timeval tv{2, 0};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-  while (::read(fd, &c, 1) == 1 && c != '\n') reply.push_back(c);
-  ::close(fd);
-  return reply;
-}
-
 TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
   test::TempDir dir("vog-vogsim");
   const auto endpoints_file = dir.path() / "endpoints.yaml";
   const auto control = dir.path() / "control.sock";
-  Child child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(), "--seed",
-               "3", "--speedup", "10", "--run-dir", dir.path().string(), "--endpoints", endpoints_file.string(),
-               "--backseat-port", "0", "--sonar-port", "0", "--control", control.string(), "--no-stdin"});
-  ASSERT_GT(child.pid(), 0);
+  test::Subprocess child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(),
+                          "--seed", "3", "--speedup", "10", "--run-dir", dir.path().string(), "--endpoints",
+                          endpoints_file.string(), "--backseat-port", "0", "--sonar-port", "0", "--control",
+                          control.string(), "--no-stdin"},
+                         {}, dir.path() / "vogsim.log");
+  ASSERT_TRUE(child.started());
 
   const auto deadline = std::chrono::steady_clock::now() + 10s;
   while (!std::filesystem::exists(endpoints_file) && std::chrono::steady_clock::now() < deadline)
@@ -132,19 +73,19 @@ TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
   ASSERT_TRUE(test::pumpUntil(ioc, [&] { return !depths.empty(); }));
   EXPECT_NEAR(depths.front(), -e->start_xyz_world.z(), 0.05);
 
-  const std::string status = controlRoundTrip(control.string(), "status");
+  const std::string status = test::controlRequest(control, "status");
   EXPECT_EQ(status.rfind("ok t_s=", 0), 0u) << status;
-  const std::string bad = controlRoundTrip(control.string(), "unplug gps 2");
+  const std::string bad = test::controlRequest(control, "unplug gps 2");
   EXPECT_NE(bad.find("error: unknown device 'gps'"), std::string::npos) << bad;
-  EXPECT_EQ(controlRoundTrip(control.string(), "unplug depth 1").rfind("ok", 0), 0u);
+  EXPECT_EQ(test::controlRequest(control, "unplug depth 1").rfind("ok", 0), 0u);
   port.stop();
 
   const auto t0 = std::chrono::steady_clock::now();
-  ASSERT_EQ(::kill(child.pid(), SIGTERM), 0);
-  const std::optional<int> st = child.waitFor(2000ms);
+  child.signal(SIGTERM);
+  const int st = child.wait(2.0);
   const double stop_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  ASSERT_TRUE(st.has_value()) << "vogsim vehicle still running 2 s after SIGTERM";
-  EXPECT_TRUE(WIFEXITED(*st) && WEXITSTATUS(*st) == 0) << "wait status " << *st;
+  ASSERT_NE(st, -1) << "vogsim vehicle still running 2 s after SIGTERM";
+  EXPECT_EQ(st, 0) << test::readTextFile(dir.path() / "vogsim.log");
   ::testing::Test::RecordProperty("sigterm_to_exit_ms", static_cast<int>(stop_ms));
   EXPECT_FALSE(std::filesystem::exists(endpoints_file));
   EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(e->dvl_device)));
@@ -154,11 +95,12 @@ TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
 
 TEST(VogsimProcessTest, BadArgumentsFailWithoutStarting) {
   test::TempDir dir("vog-vogsim");
-  Child child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(),
-               "--speedup", "0", "--run-dir", dir.path().string(), "--no-stdin"});
-  const std::optional<int> st = child.waitFor(10000ms);
-  ASSERT_TRUE(st.has_value());
-  EXPECT_TRUE(WIFEXITED(*st) && WEXITSTATUS(*st) != 0);
+  test::Subprocess child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(),
+                          "--speedup", "0", "--run-dir", dir.path().string(), "--no-stdin"},
+                         {}, dir.path() / "vogsim.log");
+  const int st = child.wait(10.0);
+  ASSERT_NE(st, -1);
+  EXPECT_NE(st, 0);
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "endpoints.yaml"));
 }
 

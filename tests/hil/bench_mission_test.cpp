@@ -1,0 +1,245 @@
+// Hardware in the loop with mock devices: `vogsim vehicle` (the simulated pier and vehicle behind
+// the real wire protocols: PD0 and Digiquartz on ptys, IMU CAN frames on the SEQPACKET stand-in,
+// sonar fragments over UDP, the backseat over TCP) and `vogd` (source: devices, its real drivers on
+// those endpoints) run as separate processes, and the operator drives a short mission with
+// `vogctl`. The mission reaches several submaps and a loop closure, vogctl fetches a snapshot and
+// a cloud, injected garbage and an unplugged IMU are survived, and `kill -9` of vogd mid-mission
+// followed by a restart resumes with no closed submap lost and the mission going on.
+#include "subprocess.hpp"
+#include "test_support.hpp"
+#include "vog/vehicle/endpoints.hpp"
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <regex>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using vog::test::Subprocess;
+
+constexpr double kSpeedup = 4.0;
+constexpr const char* kSecret = "bench-operator-secret-0123456789";
+
+// A UDP port nobody uses right now (vogd binds it for the sonar; vogsim sends to it).
+std::uint16_t freeUdpPort() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+bool waitUntil(const std::function<bool()>& done, double timeout_s) {
+  const auto end = Clock::now() + std::chrono::duration<double>(timeout_s);
+  while (Clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  return done();
+}
+
+// One vogctl run: its exit status and what it printed (stdout and stderr).
+struct Vogctl {
+  int status = -1;
+  std::string out;
+};
+
+class Bench {
+ public:
+  Bench() : dir_("vog-hil") {}
+
+  const fs::path& dir() const { return dir_.path(); }
+
+  ::testing::AssertionResult startVehicle() {
+    const fs::path run = dir() / "run";
+    fs::create_directories(run);
+    sonar_port_ = freeUdpPort();
+    vogsim_ = std::make_unique<Subprocess>(
+        std::vector<std::string>{VOGSIM_EXECUTABLE, "vehicle", "--scene",
+                                 (vog::test::sourceDir() / "config/scenes/pilings.yaml").string(), "--seed", "1",
+                                 "--speedup", std::to_string(kSpeedup), "--run-dir", run.string(), "--backseat-port",
+                                 "0", "--sonar-port", std::to_string(sonar_port_), "--control",
+                                 (run / "control.sock").string(), "--no-stdin"},
+        std::vector<std::string>{}, dir() / "vogsim.log");
+    if (!vogsim_->started()) return ::testing::AssertionFailure() << "vogsim did not start";
+    const fs::path file = run / "endpoints.yaml";
+    if (!waitUntil([&] { return fs::exists(file); }, 20.0))
+      return ::testing::AssertionFailure() << "no endpoints file: " << vog::test::readTextFile(dir() / "vogsim.log");
+    auto e = vog::vehicle::readEndpointsFile(file);
+    if (!e) return ::testing::AssertionFailure() << e.error().message;
+    endpoints_ = *e;
+    return ::testing::AssertionSuccess();
+  }
+
+  // vogd's configuration for the vehicle's endpoints (what an integrator writes for a real vehicle).
+  void writeVogdConfig() {
+    const auto& e = endpoints_;
+    std::ofstream(dir() / "operator.secret") << kSecret << "\n";
+    fs::permissions(dir() / "operator.secret", fs::perms::owner_read | fs::perms::owner_write);
+    std::ofstream y(dir() / "vogd.yaml");
+    y << "source: devices\n"
+      << "mission:\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n  max_submaps: 40\n"
+      << "devices:\n  time_scale: " << kSpeedup << "\n"
+      << "  dvl: {device: " << e.dvl_device << ", baud: " << e.dvl_baud << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      << "  depth: {device: " << e.depth_device << ", baud: " << e.depth_baud << ", latitude_deg: " << e.depth_latitude_deg
+      << ", units_code: " << e.depth_units_code << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      << "  imu: {can_interface: \"\", unix_seqpacket: " << e.imu_unix_seqpacket << ", base_id: " << e.imu_base_id
+      << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      << "  sonar: {bind_address: 127.0.0.1, port: " << sonar_port_ << "}\n"
+      << "  backseat: {address: " << e.backseat_address << ", port: " << e.backseat_port
+      << ", origin_latitude_deg: " << e.origin_latitude_deg << ", origin_longitude_deg: " << e.origin_longitude_deg
+      << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      // Scheduling jitter of a shared machine is multiplied by the speed-up.
+      << "nav:\n  dvl_mount_yaw_deg: " << e.dvl_mount_yaw_deg << "\n  imu_max_gap_s: 0.5\n  imu_timeout_s: 0.5\n"
+      << "api:\n  bind_address: 127.0.0.1\n  port: 0\n  secret_file: operator.secret\n";
+  }
+
+  ::testing::AssertionResult startVogd() {
+    fs::remove(dir() / "port");
+    vogd_ = std::make_unique<Subprocess>(
+        std::vector<std::string>{VOGD_EXECUTABLE, "--config", (dir() / "vogd.yaml").string(), "--mission-dir",
+                                 (dir() / "mission").string(), "--port-file", (dir() / "port").string()},
+        std::vector<std::string>{}, dir() / "vogd.log");
+    if (!vogd_->started()) return ::testing::AssertionFailure() << "vogd did not start";
+    if (!waitUntil([&] { return fs::exists(dir() / "port"); }, 20.0))
+      return ::testing::AssertionFailure() << "vogd wrote no port file: " << vogdLog();
+    std::ifstream(dir() / "port") >> api_port_;
+    return ::testing::AssertionSuccess();
+  }
+
+  Vogctl vogctl(std::vector<std::string> args) {
+    static int n = 0;
+    const fs::path log = dir() / ("vogctl-" + std::to_string(++n) + ".out");
+    args.insert(args.begin(), VOGCTL_EXECUTABLE);
+    args.insert(args.end(), {"--port", std::to_string(api_port_)});
+    Subprocess p(args, {}, log);
+    Vogctl r;
+    r.status = p.wait(60.0);
+    r.out = vog::test::readTextFile(log);
+    return r;
+  }
+
+  // A number from `vogctl status --json` (-1 if it does not answer).
+  long statusField(const std::string& key) {
+    const Vogctl r = vogctl({"status", "--json"});
+    std::smatch m;
+    if (r.status != 0 || !std::regex_search(r.out, m, std::regex("\"" + key + "\":(-?[0-9]+)"))) return -1;
+    return std::stol(m[1]);
+  }
+  std::string statusText(const std::string& key) {
+    const Vogctl r = vogctl({"status", "--json"});
+    std::smatch m;
+    if (r.status != 0 || !std::regex_search(r.out, m, std::regex("\"" + key + "\":\"([^\"]*)\""))) return "";
+    return m[1];
+  }
+  // A device's state in `vogctl status --json` ("" if it does not answer).
+  std::string deviceState(const std::string& device) {
+    const Vogctl r = vogctl({"status", "--json"});
+    std::smatch m;
+    if (r.status != 0 || !std::regex_search(r.out, m, std::regex("\"device\":\"" + device + "\",\"state\":\"([a-z]+)\"")))
+      return "";
+    return m[1];
+  }
+  std::string control(const std::string& line) { return vog::test::controlRequest(dir() / "run" / "control.sock", line); }
+  std::string vogdLog() const { return vog::test::readTextFile(dir() / "vogd.log"); }
+
+  Subprocess& vogd() { return *vogd_; }
+  Subprocess& vogsim() { return *vogsim_; }
+
+ private:
+  vog::test::TempDir dir_;
+  vog::vehicle::VehicleEndpoints endpoints_;
+  std::uint16_t sonar_port_ = 0;
+  std::uint16_t api_port_ = 0;
+  std::unique_ptr<Subprocess> vogsim_, vogd_;
+};
+
+TEST(BenchMission, VogdOnMockDevicesMapsSurvivesFaultsAndResumesAfterKill9) {
+  Bench b;
+  ASSERT_TRUE(b.startVehicle());
+  b.writeVogdConfig();
+  ASSERT_TRUE(b.startVogd());
+
+  // Navigation comes up from the raw devices (dead reckoning aligned to the vehicle's $BFNVG).
+  ASSERT_TRUE(waitUntil([&] { return b.deviceState("navigation") == "ok"; }, 30.0)) << b.vogctl({"status"}).out << b.vogdLog();
+
+  // Without the secret the operator command is refused; with it the mission starts.
+  const Vogctl refused = b.vogctl({"mission", "start", "--box", "-6,-4,-4,6,4,0"});
+  EXPECT_EQ(refused.status, 2) << refused.out;
+  const Vogctl started =
+      b.vogctl({"mission", "start", "--box", "-6,-4,-4,6,4,0", "--secret-file", (b.dir() / "operator.secret").string()});
+  ASSERT_EQ(started.status, 0) << started.out;
+  EXPECT_NE(started.out.find("exploring"), std::string::npos) << started.out;
+
+  // Several submaps and a loop closure, the vehicle following vogd's waypoints over the backseat.
+  ASSERT_TRUE(waitUntil([&] { return b.statusField("n_submaps") >= 4 && b.statusField("n_closures") >= 1; }, 180.0))
+      << b.vogctl({"status"}).out << b.vogdLog();
+  const std::string vehicle = b.control("status");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(vehicle, m, std::regex("commands=([0-9]+)/([0-9]+)"))) << vehicle;
+  EXPECT_GE(std::stoi(m[1]), 5) << vehicle;
+  EXPECT_EQ(m[1], m[2]) << "the vehicle refused waypoints: " << vehicle;
+
+  // The products, through the API.
+  const Vogctl snapshot = b.vogctl({"snapshot", "--out", (b.dir() / "map.bt").string()});
+  ASSERT_EQ(snapshot.status, 0) << snapshot.out;
+  octomap::OcTree tree(0.1);
+  ASSERT_TRUE(tree.readBinary((b.dir() / "map.bt").string()));
+  EXPECT_GT(tree.getNumLeafNodes(), 10000u);
+  const Vogctl cloud = b.vogctl({"cloud", "--out", (b.dir() / "cloud.ply").string(), "--json"});
+  ASSERT_EQ(cloud.status, 0) << cloud.out;
+  ASSERT_TRUE(std::regex_search(cloud.out, m, std::regex("\"points\":([0-9]+)"))) << cloud.out;
+  EXPECT_GT(std::stol(m[1]), 1000);
+  EXPECT_EQ(vog::test::readTextFile(b.dir() / "cloud.ply").rfind("ply\n", 0), 0u);
+
+  // Faults: garbage on the DVL line, then the IMU unplugged for 3 s (simulated). vogd keeps running,
+  // counts the damage, reconnects, and mapping goes on.
+  EXPECT_EQ(b.control("fault dvl garbage 2").rfind("ok", 0), 0u);
+  EXPECT_EQ(b.control("unplug imu 3").rfind("ok", 0), 0u);
+  ASSERT_TRUE(waitUntil([&] { return b.deviceState("imu") == "disconnected"; }, 10.0)) << b.vogctl({"status"}).out;
+  ASSERT_TRUE(waitUntil([&] { return b.deviceState("imu") == "ok" && b.deviceState("navigation") == "ok"; }, 20.0))
+      << b.vogctl({"status"}).out;
+  const Vogctl after_faults = b.vogctl({"status", "--json"});
+  ASSERT_TRUE(std::regex_search(after_faults.out, m, std::regex("\"device\":\"dvl\"[^}]*\"errors\":([0-9]+)"))) << after_faults.out;
+  EXPECT_GT(std::stol(m[1]), 0) << "the garbage was not seen";
+  const long submaps_before_kill_wait = b.statusField("n_submaps");
+  ASSERT_TRUE(waitUntil([&] { return b.statusField("n_submaps") > submaps_before_kill_wait; }, 60.0))
+      << "mapping stopped after the faults: " << b.vogdLog();
+
+  // kill -9 mid-mission, restart: every closed submap is back and the mission goes on.
+  const long closed = b.statusField("n_submaps");
+  ASSERT_GT(closed, 0);
+  b.vogd().signal(SIGKILL);
+  ASSERT_EQ(b.vogd().wait(5.0), 128 + SIGKILL);
+  ASSERT_TRUE(b.startVogd());
+  const long resumed = b.statusField("n_submaps");
+  EXPECT_GE(resumed, closed) << b.vogdLog();
+  EXPECT_EQ(b.statusText("mission_state"), "exploring");
+  EXPECT_NE(b.vogdLog().find("resumed"), std::string::npos);
+  ASSERT_TRUE(waitUntil([&] { return b.statusField("n_submaps") > resumed; }, 60.0))
+      << "no new submap after the resume: " << b.vogdLog();
+
+  b.vogd().signal(SIGTERM);
+  EXPECT_EQ(b.vogd().wait(5.0), 0) << b.vogdLog();
+  b.vogsim().signal(SIGTERM);
+  EXPECT_EQ(b.vogsim().wait(5.0), 0);
+}
+
+}  // namespace
