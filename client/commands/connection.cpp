@@ -35,6 +35,8 @@ void ConnectionOptions::addTo(CLI::App& cmd) {
   cmd.add_option("--port", port, "vogd API port")->capture_default_str();
   cmd.add_option("--secret-file", secret_file, "File holding the operator secret (authenticates as operator)");
   cmd.add_option("--timeout-ms", timeout_ms, "Timeout of each call")->check(CLI::Range(1, 3600000))->capture_default_str();
+  cmd.add_flag("--tls", tls, "Connect with TLS (vogd's api.tls)");
+  cmd.add_option("--ca-file", ca_file, "CA certificate(s) that signed vogd's certificate, PEM (implies --tls)");
 }
 
 namespace {
@@ -80,6 +82,8 @@ Connection openConnection(const ConnectionOptions& options, const CommandIo& io,
   }
   ClientConfig config;
   config.timeout = std::chrono::milliseconds(options.timeout_ms);
+  config.tls.enabled = options.tls || !options.ca_file.empty();
+  config.tls.ca_file = options.ca_file;
   auto c = ApiClient::connect(options.host, options.port, config);
   if (!c) {
     detail::report(io, command, c.error().message);

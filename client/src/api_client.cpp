@@ -6,9 +6,11 @@
 #include "vog/api/framing.hpp"
 
 #include <asio.hpp>
+#include <asio/ssl.hpp>
 
 #include <algorithm>
 #include <array>
+#include <optional>
 
 namespace vog::client {
 
@@ -40,8 +42,20 @@ struct ApiClient::Impl {
     return false;
   }
 
+  // The byte stream: the TLS stream over the socket, or the socket itself.
+  template <class F>
+  void withStream(F&& f) {
+    if (tls) {
+      f(*tls);
+    } else {
+      f(socket);
+    }
+  }
+
   asio::io_context io;
   tcp::socket socket{io};
+  std::unique_ptr<asio::ssl::context> tls_context;     // outlives the stream
+  std::optional<asio::ssl::stream<tcp::socket&>> tls;  // over `socket` when TLS is on
   api::FrameDecoder decoder;
   std::array<std::uint8_t, 64 * 1024> buf{};
 };
@@ -62,6 +76,47 @@ Status ClientConfig::validate() const {
 Error toError(const v1::Error& error) {
   return Error{v1::ErrorCode_Name(error.code()) + ": " + error.message()};
 }
+
+namespace {
+
+// The client side of the TLS handshake: TLS 1.2 or newer, the server's certificate verified
+// against the CA file (or the system's CAs) and checked to name `host`.
+Status startTls(ApiClient::Impl& impl, const std::string& host, std::uint16_t port, const ClientConfig& config,
+                Clock::time_point deadline) {
+  const std::string where = host + ":" + std::to_string(port);
+  impl.tls_context = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_client);
+  asio::ssl::context& context = *impl.tls_context;
+  asio::error_code ec;
+  context.set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                          asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 | asio::ssl::context::no_tlsv1_1,
+                      ec);
+  if (config.tls.ca_file.empty()) {
+    context.set_default_verify_paths(ec);
+  } else {
+    context.load_verify_file(config.tls.ca_file.string(), ec);
+    if (ec) return Error{"TLS: cannot read the CA file " + config.tls.ca_file.string() + ": " + ec.message()};
+  }
+  context.set_verify_mode(asio::ssl::verify_peer);
+  impl.tls.emplace(impl.socket, context);
+  impl.tls->set_verify_callback(asio::ssl::host_name_verification(host));
+  asio::error_code not_ip;
+  (void)asio::ip::make_address(host, not_ip);
+  if (not_ip) {
+    // SNI, for names only (RFC 6066); SSL_set_tlsext_host_name without its C cast.
+    ::SSL_ctrl(impl.tls->native_handle(), SSL_CTRL_SET_TLSEXT_HOSTNAME, TLSEXT_NAMETYPE_host_name,
+               const_cast<char*>(host.c_str()));
+  }
+  bool done = false;
+  impl.tls->async_handshake(asio::ssl::stream_base::client, [&](const asio::error_code& e) {
+    ec = e;
+    done = true;
+  });
+  if (!impl.runUntil(done, deadline)) return Error{"TLS handshake with " + where + " timed out"};
+  if (ec) return Error{"TLS handshake with " + where + " failed: " + ec.message()};
+  return {};
+}
+
+}  // namespace
 
 Result<std::unique_ptr<ApiClient>> ApiClient::connect(const std::string& host, std::uint16_t port,
                                                       ClientConfig config) {
@@ -97,6 +152,9 @@ Result<std::unique_ptr<ApiClient>> ApiClient::connect(const std::string& host, s
   }
   if (ec) return Error{"cannot connect to " + host + ":" + std::to_string(port) + ": " + ec.message()};
   impl->socket.set_option(tcp::no_delay(true), ec);
+  if (config.tls.enabled) {
+    if (Status s = startTls(*impl, host, port, config, deadline); !s.ok()) return s.error();
+  }
   return std::unique_ptr<ApiClient>(new ApiClient(std::move(impl), std::move(config)));
 }
 
@@ -119,11 +177,12 @@ Status ApiClient::sendRaw(std::string_view bytes) {
   if (broken_) return Error{"connection is broken"};
   bool done = false;
   asio::error_code ec;
-  asio::async_write(impl_->socket, asio::buffer(bytes.data(), bytes.size()),
-                    [&](const asio::error_code& e, std::size_t) {
-                      ec = e;
-                      done = true;
-                    });
+  impl_->withStream([&](auto& stream) {
+    asio::async_write(stream, asio::buffer(bytes.data(), bytes.size()), [&](const asio::error_code& e, std::size_t) {
+      ec = e;
+      done = true;
+    });
+  });
   // A partial write leaves the stream mid-frame: a timeout breaks the connection.
   if (!impl_->runUntil(done, Clock::now() + config_.timeout)) {
     return fail("sending timed out after " + ms(config_.timeout));
@@ -150,15 +209,18 @@ Result<v1::Envelope> ApiClient::receive(std::chrono::milliseconds timeout) {
     bool done = false;
     asio::error_code ec;
     std::size_t n = 0;
-    impl_->socket.async_read_some(asio::buffer(impl_->buf), [&](const asio::error_code& e, std::size_t k) {
-      ec = e;
-      n = k;
-      done = true;
+    impl_->withStream([&](auto& stream) {
+      stream.async_read_some(asio::buffer(impl_->buf), [&](const asio::error_code& e, std::size_t k) {
+        ec = e;
+        n = k;
+        done = true;
+      });
     });
     if (!impl_->runUntil(done, deadline)) return Error{"no frame from the server within " + ms(timeout)};
     if (ec) {
-      return fail(ec == asio::error::eof ? std::string("the server closed the connection")
-                                         : "receive failed: " + ec.message());
+      // A TLS peer that closes without close_notify reads as a truncated stream.
+      const bool closed = ec == asio::error::eof || ec == asio::ssl::error::stream_truncated;
+      return fail(closed ? std::string("the server closed the connection") : "receive failed: " + ec.message());
     }
     impl_->decoder.feed(std::span<const std::uint8_t>(impl_->buf.data(), n));
   }

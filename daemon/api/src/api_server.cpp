@@ -4,6 +4,7 @@
 #include "vog/api/framing.hpp"
 
 #include <asio.hpp>
+#include <asio/ssl.hpp>
 
 #include <atomic>
 #include <deque>
@@ -28,11 +29,12 @@ class Session;
 
 struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   Core(asio::io_context& io_in, ApiBackend& backend, ApiServerConfig config_in, ApiLogger* logger_in,
-       std::unique_ptr<NonceSource> nonces_in)
+       std::unique_ptr<NonceSource> nonces_in, std::unique_ptr<asio::ssl::context> tls_in)
       : io(io_in),
         config(std::move(config_in)),
         logger(logger_in),
         nonces(std::move(nonces_in)),
+        tls(std::move(tls_in)),
         dispatcher(backend, *nonces, logger_in, config.dispatch),
         acceptor(io_in) {}
 
@@ -49,6 +51,7 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   const ApiServerConfig config;
   ApiLogger* logger;
   std::unique_ptr<NonceSource> nonces;
+  std::unique_ptr<asio::ssl::context> tls;  // null: plain TCP
   Dispatcher dispatcher;
   tcp::acceptor acceptor;
   bool stopped = false;                                             // io thread only
@@ -63,13 +66,14 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   std::atomic<std::uint64_t> status_seq{0};
   // Counters read by stats() from any thread.
   std::atomic<std::uint64_t> n_clients{0}, n_accepted{0}, n_refused{0}, n_protocol_errors{0}, n_slow{0},
-      n_drops{0}, n_waypoint_drops{0}, n_waypoints{0}, n_requests{0};
+      n_drops{0}, n_waypoint_drops{0}, n_waypoints{0}, n_requests{0}, n_tls_failures{0};
 };
 
 namespace {
 
 // One client connection.
-// Lifecycle: open (reading requests, writing replies and streams) -> closing (an Error is queued;
+// Lifecycle: [handshaking (TLS only; at most tls.handshake_timeout)] -> open (reading requests,
+// writing replies and streams) -> closing (an Error is queued;
 // no more reads; only queued responses are flushed, for at most close_timeout) -> closed (socket
 // closed, removed from Core::sessions). Invariants: at most one async write and one async read in
 // flight; queues are bounded as the server header describes. io thread only.
@@ -87,6 +91,7 @@ class Session : public std::enable_shared_from_this<Session> {
     asio::error_code ec;
     const auto ep = socket_.remote_endpoint(ec);
     state_.peer = ec ? std::string("unknown peer") : ep.address().to_string() + ":" + std::to_string(ep.port());
+    if (core_->tls) tls_.emplace(socket_, *core_->tls);
   }
 
   // Destroyed without closeNow() only when the io_context is destroyed with this session's
@@ -97,13 +102,30 @@ class Session : public std::enable_shared_from_this<Session> {
   const std::string& peer() const { return state_.peer; }
 
   void start() {
-    if (refused_) {
-      queueResponse(makeError(0, v1::ERROR_CODE_TOO_MANY_CLIENTS,
-                              "the server has " + std::to_string(core_->config.max_clients) + " clients already"));
-      beginClose();
+    if (!tls_) {
+      begin();
       return;
     }
-    read();
+    close_timer_.expires_after(core_->config.tls.handshake_timeout);
+    close_timer_.async_wait([self = shared_from_this()](const asio::error_code& ec) {
+      if (ec || self->handshake_done_) return;
+      ++self->core_->n_tls_failures;
+      self->core_->log(LogLevel::kWarning, self->state_.peer + ": TLS handshake timed out; disconnecting");
+      self->closeNow();
+    });
+    tls_->async_handshake(asio::ssl::stream_base::server, [self = shared_from_this()](const asio::error_code& ec) {
+      if (self->closed_) return;
+      self->handshake_done_ = true;
+      self->close_timer_.cancel();
+      if (ec) {
+        ++self->core_->n_tls_failures;
+        self->core_->log(LogLevel::kWarning, self->state_.peer + ": TLS handshake failed: " + ec.message() +
+                                                 "; disconnecting");
+        self->closeNow();
+        return;
+      }
+      self->begin();
+    });
   }
 
   void pushWaypoint(const Waypoint& w) {
@@ -150,11 +172,34 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
  private:
+  // The session proper, after the TLS handshake if there is one.
+  void begin() {
+    if (refused_) {
+      queueResponse(makeError(0, v1::ERROR_CODE_TOO_MANY_CLIENTS,
+                              "the server has " + std::to_string(core_->config.max_clients) + " clients already"));
+      beginClose();
+      return;
+    }
+    read();
+  }
+
+  // The byte stream: the TLS stream over the socket, or the socket itself.
+  template <class F>
+  void withStream(F&& f) {
+    if (tls_) {
+      f(*tls_);
+    } else {
+      f(socket_);
+    }
+  }
+
   void read() {
     if (closing_ || closed_) return;
-    socket_.async_read_some(asio::buffer(read_buf_), [self = shared_from_this()](const asio::error_code& ec,
-                                                                                 std::size_t n) {
-      self->onRead(ec, n);
+    withStream([this](auto& stream) {
+      stream.async_read_some(asio::buffer(read_buf_), [self = shared_from_this()](const asio::error_code& ec,
+                                                                                  std::size_t n) {
+        self->onRead(ec, n);
+      });
     });
   }
 
@@ -323,23 +368,27 @@ class Session : public std::enable_shared_from_this<Session> {
       return;
     }
     writing_ = true;
-    asio::async_write(socket_, asio::buffer(out_), [self = shared_from_this()](const asio::error_code& ec,
-                                                                              std::size_t) {
-      self->writing_ = false;
-      if (self->closed_) return;
-      if (ec) {
-        if (ec != asio::error::operation_aborted) {
-          self->core_->log(LogLevel::kInfo, self->state_.peer + ": write failed: " + ec.message());
+    withStream([this](auto& stream) {
+      asio::async_write(stream, asio::buffer(out_), [self = shared_from_this()](const asio::error_code& ec,
+                                                                               std::size_t) {
+        self->writing_ = false;
+        if (self->closed_) return;
+        if (ec) {
+          if (ec != asio::error::operation_aborted) {
+            self->core_->log(LogLevel::kInfo, self->state_.peer + ": write failed: " + ec.message());
+          }
+          self->closeNow();
+          return;
         }
-        self->closeNow();
-        return;
-      }
-      self->pump();
+        self->pump();
+      });
     });
   }
 
   std::shared_ptr<ApiServer::Core> core_;
   tcp::socket socket_;
+  std::optional<asio::ssl::stream<tcp::socket&>> tls_;  // over socket_, when the server has TLS
+  bool handshake_done_ = false;
   asio::steady_timer close_timer_;
   std::uint64_t id_;
   bool refused_;
@@ -447,15 +496,46 @@ Status ApiServerConfig::validate() const {
   if (close_timeout.count() < 1 || close_timeout.count() > 60000) {
     return Error{"api.close_timeout_ms: " + std::to_string(close_timeout.count()) + " is outside [1, 60000]"};
   }
+  if (tls.enabled() && tls.private_key_file.empty()) return Error{"api.tls.private_key_file: required with a certificate"};
+  if (tls.handshake_timeout.count() < 1 || tls.handshake_timeout.count() > 600000) {
+    return Error{"api.tls.handshake_timeout_ms: " + std::to_string(tls.handshake_timeout.count()) +
+                 " is outside [1, 600000]"};
+  }
   return {};
 }
+
+namespace {
+
+Result<std::unique_ptr<asio::ssl::context>> makeTlsContext(const TlsServerConfig& c) {
+  auto context = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
+  asio::error_code ec;
+  context->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                           asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                           asio::ssl::context::no_tlsv1_1 | asio::ssl::context::single_dh_use,
+                       ec);
+  if (!ec) context->use_certificate_chain_file(c.certificate_chain_file.string(), ec);
+  if (ec) return Error{"api.tls.certificate_file: cannot use " + c.certificate_chain_file.string() + ": " + ec.message()};
+  context->use_private_key_file(c.private_key_file.string(), asio::ssl::context::pem, ec);
+  if (ec) return Error{"api.tls.private_key_file: cannot use " + c.private_key_file.string() + ": " + ec.message()};
+  if (::SSL_CTX_check_private_key(context->native_handle()) != 1)
+    return Error{"api.tls.private_key_file: " + c.private_key_file.string() + " does not match the certificate"};
+  return context;
+}
+
+}  // namespace
 
 Result<std::unique_ptr<ApiServer>> ApiServer::create(asio::io_context& io, ApiBackend& backend,
                                                      ApiServerConfig config, ApiLogger* logger,
                                                      std::unique_ptr<NonceSource> nonces) {
   if (Status s = config.validate(); !s.ok()) return s.error();
   if (!nonces) nonces = std::make_unique<SystemNonceSource>();
-  auto core = std::make_shared<Core>(io, backend, std::move(config), logger, std::move(nonces));
+  std::unique_ptr<asio::ssl::context> tls;
+  if (config.tls.enabled()) {
+    auto context = makeTlsContext(config.tls);
+    if (!context) return context.error();
+    tls = std::move(context).value();
+  }
+  auto core = std::make_shared<Core>(io, backend, std::move(config), logger, std::move(nonces), std::move(tls));
   return std::unique_ptr<ApiServer>(new ApiServer(std::move(core)));
 }
 
@@ -528,6 +608,7 @@ ApiServerStats ApiServer::stats() const {
   s.waypoint_drops = core_->n_waypoint_drops.load();
   s.waypoints_published = core_->n_waypoints.load();
   s.requests = core_->n_requests.load();
+  s.tls_failures = core_->n_tls_failures.load();
   return s;
 }
 

@@ -186,6 +186,8 @@ Status Daemon::init() {
   api::ApiServerConfig ac;
   ac.max_clients = static_cast<std::size_t>(config_.api.max_clients);
   ac.dispatch.max_frame_bytes = config_.api.max_frame_bytes;
+  ac.tls.certificate_chain_file = config_.api.tls_certificate_file;
+  ac.tls.private_key_file = config_.api.tls_private_key_file;
   if (!config_.api.secret_file.empty()) {
     auto secret = readSecret(config_.api.secret_file);
     if (!secret) return secret.error();

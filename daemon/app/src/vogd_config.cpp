@@ -266,6 +266,15 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   std::string secret;
   api.text("secret_file", secret);
   if (!secret.empty()) c.api.secret_file = base_dir / secret;
+  ConfigMap tls = api.map("tls");
+  std::string certificate, key;
+  tls.text("certificate_file", certificate);
+  tls.text("private_key_file", key);
+  if (certificate.empty() != key.empty())
+    tls.fail(certificate.empty() ? "certificate_file" : "private_key_file", "give both certificate_file and private_key_file, or neither");
+  if (!certificate.empty()) c.api.tls_certificate_file = base_dir / certificate;
+  if (!key.empty()) c.api.tls_private_key_file = base_dir / key;
+  tls.finish();
   api.finish();
   ConfigMap log = root.map("log");
   log.choice("level", c.log_level, {"debug", "info", "warning", "error"});
@@ -288,6 +297,11 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
                                 c.nav.validate("nav")};
   if (c.source == Source::kDevices) {
     const DevicesSection& d = c.devices;
+    if (d.feed.navigation == NavigationSource::kBackseat && !d.backseat_enabled)
+      checks.push_back(Error{"devices.navigation: backseat needs devices.backseat.enabled"});
+    if (d.feed.navigation == NavigationSource::kDeadReckoning && !(d.dvl_enabled && d.imu_enabled && d.depth_enabled))
+      checks.push_back(Error{"devices.navigation: dead_reckoning needs the dvl, imu and depth devices enabled"});
+    if (!d.sonar_enabled) checks.push_back(Error{"devices.sonar: the sonar must be enabled (it is what is mapped)"});
     if (d.dvl_enabled) checks.push_back(d.dvl.validate("devices.dvl"));
     if (d.depth_enabled) checks.push_back(d.depth.validate("devices.depth"));
     if (d.imu_enabled) checks.push_back(d.imu.validate("devices.imu"));
@@ -297,11 +311,6 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
       checks.push_back(d.follower.validate());
     }
     checks.push_back(d.feed.validate());
-    if (d.feed.navigation == NavigationSource::kBackseat && !d.backseat_enabled)
-      checks.push_back(Error{"devices.navigation: backseat needs devices.backseat.enabled"});
-    if (d.feed.navigation == NavigationSource::kDeadReckoning && !(d.dvl_enabled && d.imu_enabled && d.depth_enabled))
-      checks.push_back(Error{"devices.navigation: dead_reckoning needs the dvl, imu and depth devices enabled"});
-    if (!d.sonar_enabled) checks.push_back(Error{"devices.sonar: the sonar must be enabled (it is what is mapped)"});
     if (d.aux_enabled) checks.push_back(d.aux.validate("devices.aux"));
   }
   for (const Status& s : checks) {

@@ -176,6 +176,17 @@ TEST(VogdConfig, CrossFieldRulesAreChecked) {
   EXPECT_NE(errorOf("source: devices\ndevices: {imu: {can_interface: can0, unix_seqpacket: /run/x}}\n")
                 .find("devices.imu.unix_seqpacket: give either"),
             std::string::npos);
+  EXPECT_NE(errorOf("source: devices\napi: {tls: {certificate_file: server.pem}}\n")
+                .find("api.tls.private_key_file: give both certificate_file and private_key_file"),
+            std::string::npos);
+  // The device backend's navigation needs its devices.
+  EXPECT_NE(errorOf("source: devices\ndevices:\n  navigation: backseat\n  backseat: {enabled: false}\n")
+                .find("devices.navigation: backseat needs devices.backseat.enabled"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\ndevices:\n  dvl: {enabled: false}\n")
+                .find("devices.navigation: dead_reckoning needs the dvl, imu and depth devices enabled"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\ndevices: {time_scale: 0}\n").find("devices.time_scale"), std::string::npos);
   // A component's own rule (clamping bounds around the occupancy threshold), named by section.
   const std::string e = errorOf("source: devices\nmapping:\n  grid: {clamp_max: 0.6, occupancy_threshold: 0.7}\n");
   EXPECT_NE(e.find("mapping"), std::string::npos) << e;

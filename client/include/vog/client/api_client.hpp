@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -18,8 +19,16 @@
 
 namespace vog::client {
 
+// TLS to a server configured with api.tls: the server's certificate is verified against `ca_file`
+// (PEM; empty: the system's trusted CAs) and must name the host connected to.
+struct ClientTlsConfig {
+  bool enabled = false;
+  std::filesystem::path ca_file;
+};
+
 struct ClientConfig {
   std::string client_name = "vogctl";
+  ClientTlsConfig tls;
   std::uint32_t max_frame_bytes = 64u << 20;  // largest frame accepted from the server
   std::chrono::milliseconds timeout{10000};   // per call: connect, each request, each frame of a transfer
   std::size_t max_buffered_streams = 4096;    // stream messages kept while waiting for a response
@@ -47,7 +56,7 @@ struct ServerError {
   std::string message;
 };
 
-// One TCP connection to vogd.
+// One TCP (or TLS over TCP) connection to vogd.
 // Lifecycle: connect() -> calls (each blocks until its response, an error frame, or the timeout) ->
 // destroy. Stream messages arriving meanwhile are buffered (oldest dropped beyond
 // max_buffered_streams) and returned by nextStream(). After a transport or framing error the

@@ -10,7 +10,8 @@
 //    status are coalesced (a newer one replaces an unsent one, counted);
 //  - map and cloud transfers are produced chunk by chunk as the socket drains.
 // Protocol violations (malformed frame, oversize length, unknown message type) get an Error frame,
-// then that client alone is disconnected.
+// then that client alone is disconnected. With TLS configured every session starts with a TLS
+// handshake; a client that fails it (plain TCP, a bad certificate) is closed and counted.
 
 #include "vog/api/auth.hpp"
 #include "vog/api/dispatcher.hpp"
@@ -18,6 +19,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -27,8 +29,19 @@ class io_context;
 
 namespace vog::api {
 
+// TLS (asio::ssl, TLS 1.2 and newer) for every client: the server's certificate chain and key, PEM.
+// Clients verify the server against their CA file; authentication of operators is unchanged
+// (HMAC challenge-response inside the encrypted channel).
+struct TlsServerConfig {
+  std::filesystem::path certificate_chain_file;
+  std::filesystem::path private_key_file;
+  std::chrono::milliseconds handshake_timeout{5000};  // a client that does not finish is closed
+  bool enabled() const { return !certificate_chain_file.empty(); }
+};
+
 struct ApiServerConfig {
   DispatchConfig dispatch;
+  TlsServerConfig tls;  // disabled when no certificate is given
   std::size_t max_clients = 64;
   std::size_t max_in_flight = 16;          // requests whose replies are not yet handed to the socket
   double max_requests_per_s = 200.0;       // token bucket refill rate per client
@@ -47,6 +60,7 @@ struct ApiServerStats {
   std::uint64_t accepted = 0;
   std::uint64_t refused_full = 0;          // refused: max_clients reached
   std::uint64_t protocol_errors = 0;       // disconnects for malformed/oversize/unknown frames
+  std::uint64_t tls_failures = 0;          // TLS handshakes that failed or timed out
   std::uint64_t slow_disconnects = 0;      // disconnects for unread responses
   std::uint64_t stream_drops = 0;          // stream messages dropped or coalesced, all clients
   std::uint64_t waypoint_drops = 0;        // of which waypoints (poses and status are coalesced)

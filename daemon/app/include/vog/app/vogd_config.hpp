@@ -71,6 +71,8 @@ struct ApiSection {
   std::uint32_t max_frame_bytes = 4u << 20;
   int max_clients = 64;
   std::filesystem::path secret_file;  // operator shared secret; empty: operator role disabled
+  std::filesystem::path tls_certificate_file;  // PEM chain; set: every client speaks TLS
+  std::filesystem::path tls_private_key_file;  // PEM
 };
 
 struct VogdConfig {
