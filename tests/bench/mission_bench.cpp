@@ -574,6 +574,13 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("path_m", path_m);
   out.add("n_submaps", static_cast<std::int64_t>(nSubmaps()));
   out.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
+  // Loop-closure attempts and why the others were rejected (the reasons of LoopCloser).
+  const slam::LoopCloseStats& lc = pipeline.loopStats();
+  out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
+  out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
+  std::string reasons;
+  for (const auto& [reason, n] : lc.rejected_by_reason) reasons += (reasons.empty() ? "" : "; ") + reason + ": " + std::to_string(n);
+  out.add("closures_rejected", reasons);
   out.add("sim_s", simS());
   out.add("wall_s", total.seconds());
   out.add("realtime_factor", simS() / total.seconds());
