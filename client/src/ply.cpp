@@ -1,9 +1,9 @@
 #include "vog/client/ply.hpp"
 
+#include "vog/codec/atomic_file.hpp"
+
 #include <bit>
 #include <cstdint>
-#include <fstream>
-#include <system_error>
 
 namespace vog::client {
 
@@ -43,27 +43,7 @@ std::string encodePly(const api::Cloud& cloud) {
 
 Status writePly(const std::filesystem::path& file, const api::Cloud& cloud) {
   const std::string bytes = encodePly(cloud);
-  std::filesystem::path tmp = file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return Error{"cannot write " + tmp.string()};
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      return Error{"error while writing " + tmp.string()};
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    return Error{"cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message()};
-  }
-  return {};
+  return codec::writeFileAtomically(file, bytes);
 }
 
 }  // namespace vog::client

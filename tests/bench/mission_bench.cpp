@@ -197,6 +197,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   bool json = false;
   bool global_search = true;
   bool root_first = true;
+  slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
   CLI::App app{"vog-bench mission"};
   app.add_option("--scene", scene_file, "scene YAML file");
   app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
@@ -210,6 +211,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--root-first", root_first,
                  "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
                  "the fix, to reproduce the collisions it caused");
+  app.add_option("--lc-max-fitness", mc.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
+  double max_heading_deg = mc.loop_closer.max_heading_difference_rad * 180.0 / std::numbers::pi;
+  app.add_option("--lc-max-heading-deg", max_heading_deg, "loop closures: viewing-direction gate, deg");
   app.add_flag("--json", json, "print JSON (the only output format)");
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
@@ -257,7 +261,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   sim::LockstepSimulation& simulation = *sim_r;
 
   // Mapping: library defaults.
-  slam::MappingPipelineConfig mc;
+  mc.loop_closer.max_heading_difference_rad = max_heading_deg * std::numbers::pi / 180.0;
   mc.loop_closures = mode == Mode::kVogLc;
   mc.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
   auto pipeline_r = slam::MappingPipeline::create(mc);

@@ -3,15 +3,14 @@
 
 #include "vog/codec/png.hpp"
 
+#include "vog/codec/atomic_file.hpp"
 #include "vog/codec/bytes.hpp"
 
 #include <zlib.h>
 
 #include <algorithm>
 #include <cassert>
-#include <fstream>
 #include <limits>
-#include <system_error>
 
 namespace vog::codec {
 
@@ -108,27 +107,7 @@ Result<std::string> toPng(const RgbImage& image) {
 Status writePng(const std::filesystem::path& file, const RgbImage& image) {
   auto bytes = toPng(image);
   if (!bytes) return bytes.error();
-  std::filesystem::path tmp = file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return Error{"cannot write " + tmp.string()};
-    out.write(bytes->data(), static_cast<std::streamsize>(bytes->size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      return Error{"error while writing " + tmp.string()};
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    return Error{"cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message()};
-  }
-  return {};
+  return writeFileAtomically(file, *bytes);
 }
 
 }  // namespace vog::codec

@@ -1,9 +1,7 @@
 #include "vog/vehicle/endpoints.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
+#include "vog/codec/atomic_file.hpp"
 
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -11,22 +9,6 @@
 #include <yaml-cpp/yaml.h>
 
 namespace vog::vehicle {
-namespace {
-
-Status writeAll(int fd, const std::string& text) {
-  std::size_t off = 0;
-  while (off < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + off, text.size() - off);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return Error{std::strerror(errno)};
-    }
-    off += static_cast<std::size_t>(n);
-  }
-  return Status::success();
-}
-
-}  // namespace
 
 Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoints& e) {
   YAML::Emitter out;
@@ -68,18 +50,8 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
   text += out.c_str();
   text += "\n";
 
-  // Atomic replace: write a temporary file next to it, fsync, rename over the target.
-  const std::filesystem::path tmp = file.string() + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Error{"endpoints file " + tmp.string() + ": " + std::strerror(errno)};
-  Status st = writeAll(fd, text);
-  if (st.ok() && ::fsync(fd) != 0) st = Error{std::strerror(errno)};
-  ::close(fd);
-  if (st.ok() && ::rename(tmp.c_str(), file.c_str()) != 0) st = Error{std::strerror(errno)};
-  if (!st.ok()) {
-    ::unlink(tmp.c_str());
+  if (Status st = codec::writeFileAtomically(file, text, /*sync=*/true); !st.ok())
     return Error{"endpoints file " + file.string() + ": " + st.error().message};
-  }
   return Status::success();
 }
 
