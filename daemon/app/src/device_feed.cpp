@@ -216,7 +216,7 @@ Result<geometry::Pose3> DeviceFeed::backseatPoseAt(std::int64_t stamp_ns) const 
   return Error{"the stamp is older than the kept vehicle navigation"};
 }
 
-void DeviceFeed::emitOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out) {
+void DeviceFeed::addOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out) {
   if (stamp_ns < last_odometry_ns_) return;
   last_odometry_ns_ = stamp_ns;
   OdometrySample o;
@@ -233,7 +233,7 @@ void DeviceFeed::emitOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, F
 void DeviceFeed::onDvlAccepted(std::int64_t stamp_ns, FeedOutput& out) {
   if (config_.navigation != NavigationSource::kDeadReckoning) return;
   auto T = odometryPoseAt(stamp_ns);
-  if (T) emitOdometry(stamp_ns, *T, out);
+  if (T) addOdometry(stamp_ns, *T, out);
 }
 
 void DeviceFeed::onSonarFrame(const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out) {
@@ -305,7 +305,7 @@ void DeviceFeed::onBackseat(backseat::BackseatSentence sentence, std::int64_t st
   out.vehicle_navigation = v;
 
   if (config_.navigation == NavigationSource::kBackseat) {
-    emitOdometry(stamp_ns, v.T_world_vehicle, out);
+    addOdometry(stamp_ns, v.T_world_vehicle, out);
     return;
   }
   if (config_.align_to_vehicle && !aligned_) {

@@ -90,8 +90,6 @@ struct DeviceSource::Impl {
   }
 
   void openDevices() {
-    using std::placeholders::_1;
-    using std::placeholders::_2;
     auto bytesTo = [this](DeviceId d) {
       return [this, d](std::span<const std::uint8_t> b, std::int64_t t) { onChunk(d, t, b); };
     };

@@ -124,7 +124,7 @@ class DeviceFeed {
   void onSonarFrame(const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out);
   void onBackseat(backseat::BackseatSentence sentence, std::int64_t stamp_ns, FeedOutput& out);
   Result<geometry::Pose3> backseatPoseAt(std::int64_t stamp_ns) const;
-  void emitOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out);
+  void addOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out);
 
   DeviceFeedConfig config_;
   backseat::LocalTangentPlane ltp_;
