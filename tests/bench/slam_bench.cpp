@@ -161,6 +161,8 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   app.add_option("--noise-profile", noise_profile, "odometry noise: eq41 (thesis Eq. 4.1, literal) | random_walk");
   app.add_option("--noise-scale", noise_scale, "factor on the odometry noise variances")->check(CLI::Range(0.0, 1e3));
   app.add_option("--max-scans", max_scans, "scans per submap (thesis Table 4.2: 100)")->check(CLI::Range(2, 100000));
+  slam::MappingPipelineConfig base;  // library defaults; the options below override a few
+  app.add_option("--lc-max-fitness", base.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
   app.add_flag("--json", json, "print JSON (the only output format)");
   try {
     app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
@@ -218,7 +220,6 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   if (run->inputs.empty()) return fail("the simulation produced no scan");
 
   // The reference: every scan at its ground-truth pose in one grid whose frame is the world.
-  slam::MappingPipelineConfig base;
   base.builder.max_scans = max_scans;
   auto truth_grid = vog::map::LocalGrid::create(base.builder.grid);
   if (!truth_grid) return fail(truth_grid.error().message);

@@ -37,10 +37,15 @@ struct LoopCloserConfig {
   CandidateConfig candidates;
   PointToPoint2dConfig p2p;
   PointToPlaneConfig point_to_plane;  // degeneracy_aware is forced on in kDegenerate mode
-  // Drift rates for criterion 3 default to the odometry noise of thesis Eq. 4.1. Fitness 0.015 m^2:
-  // on the propeller (vog-bench slam) registrations stuck between two blades ended at 0.02-0.03 m^2,
-  // correct ones at 0.002-0.012 m^2.
-  IcpAcceptanceConfig acceptance{0.015, 0.00138, 0.00138};
+  // Drift rates for criterion 3 default to the odometry noise of thesis Eq. 4.1. Fitness 0.05 m^2:
+  // on the propeller's blades correct registrations end at 0.002-0.012 m^2, but on pilings two
+  // views of a cylinder within the viewing gate see its faces a little apart and correct
+  // registrations end higher: at 0.015 m^2 the closed loop on the pilings (vog-bench mission,
+  // seeds 1-5) accepted 0-12 closures and covered 0.55-0.98; at 0.05 it accepts 17-38 and covers
+  // 0.89-0.98, with the propeller's coverage and RMSE no worse. The looser bound lets 11 of 95
+  // registrations stuck between two blades through on the propeller orbit (vog-bench slam, seeds
+  // 1-5); the yaw check and the robust loss keep their effect on the reconstruction within 3 mm.
+  IcpAcceptanceConfig acceptance{0.05, 0.00138, 0.00138};
   // Viewing-direction gate, added to Alg. 6: a profiling sonar only sees the faces of objects turned
   // towards it, so two submaps whose base headings differ much see different faces of the same pilings
   // (the near halves of a cylinder seen from opposite sides are 2 r apart) and ICP aligns them with a
