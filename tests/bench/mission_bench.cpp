@@ -197,6 +197,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   bool json = false;
   bool global_search = true;
   bool root_first = true;
+  bool obstruction_feedback = true;
   slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
   CLI::App app{"vog-bench mission"};
   app.add_option("--scene", scene_file, "scene YAML file");
@@ -208,6 +209,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       ->check(CLI::Range(1, 100000));
   app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
   app.add_option("--global-search", global_search, "planner's global search when the local tree finds no gain (1/0)");
+  app.add_option("--obstruction-feedback", obstruction_feedback,
+                 "report a refused move to the planner, which blocks the space ahead (1/0)");
   app.add_option("--root-first", root_first,
                  "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
                  "the fix, to reproduce the collisions it caused");
@@ -434,6 +437,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         c.true_clearance_m = std::min(c.true_clearance_m, (q - c.T_true.translation()).norm());
       collision_rows.push_back(c);
       ++collisions;  // the planner sent the vehicle into the scene; it was stopped short
+      // The vehicle reports where it was stopped and where it was going (its estimate, as the
+      // daemon does); the planner blocks the space ahead of it.
+      if (const auto next = simulation.vehicle().nextWaypoint(); next && obstruction_feedback) {
+        const Pose3 T_map_true = estimatedPose() * c.T_true.inverse();
+        planner.reportObstruction(c.T_estimated.translation(), T_map_true * next->xyz_world);
+      }
       if (auto st = simulation.vehicle().setWaypoints({}); !st) return fail(st.error().message);
     }
     if (nSubmaps() >= static_cast<std::size_t>(submap_budget)) break;

@@ -370,13 +370,13 @@ void Daemon::publishMappingState() {
 
 Pose3 Daemon::estimatedPose() const { return T_map_odom_ * odometry_.T_odom_vehicle; }
 
+Pose3 Daemon::mapFromSource() const {
+  const std::lock_guard lock(state_mutex_);
+  return T_map_odom_ * (T_oldodom_newodom_ ? *T_oldodom_newodom_ : Pose3::Identity());
+}
+
 Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns) {
-  Pose3 T_source_map;
-  {
-    const std::lock_guard lock(state_mutex_);
-    const Pose3 T_newodom_oldodom = T_oldodom_newodom_ ? T_oldodom_newodom_->inverse() : Pose3::Identity();
-    T_source_map = T_newodom_oldodom * T_map_odom_.inverse();
-  }
+  const Pose3 T_source_map = mapFromSource().inverse();
   std::vector<SourceWaypoint> out;
   for (const plan::Waypoint& w : waypoints_map) {
     const Pose3 T = T_source_map * fromWaypoint(w.p_world, w.yaw_rad);
@@ -479,6 +479,14 @@ void Daemon::planningLoop() {
         if (auto st = sendWaypoints(spin, stamp); !st) fail("waypoints", st.error());
         continue;
       }
+    }
+    if (auto stopped = source_->takeObstruction(); stopped && planner_) {
+      const Pose3 T_map_source = mapFromSource();
+      const Eigen::Vector3d p = T_map_source * stopped->p_odom_m;
+      if (auto q = planner_->reportObstruction(p, T_map_source * stopped->target_odom_m))
+        spdlog::warn("planner: the vehicle was stopped at ({:.2f}, {:.2f}, {:.2f}); ({:.2f}, {:.2f}, {:.2f}) is blocked "
+                     "from now on",
+                     p.x(), p.y(), p.z(), q->x(), q->y(), q->z());
     }
     if (!planner_ || !source_->idle()) {
       const std::lock_guard lock(state_mutex_);

@@ -150,9 +150,11 @@ struct DeviceSource::Impl {
       if (t - std::max(last, depth_asked_ns) > kDepthRestartNs) startDepthStream();
     }
     std::vector<api::DeviceHealth> h = collectHealth(t);
+    const std::optional<SourceObstruction> stopped = follower.takeObstruction();
     const std::lock_guard lock(mutex);
     health = std::move(h);
     follower_idle = follower.idle();
+    if (stopped) obstruction = stopped;
   }
 
   std::vector<api::DeviceHealth> collectHealth(std::int64_t t) const {
@@ -235,6 +237,7 @@ struct DeviceSource::Impl {
   std::optional<std::vector<SourceWaypoint>> pending;  // guarded by mutex
   std::vector<api::DeviceHealth> health;               // guarded by mutex
   bool follower_idle = true;                           // guarded by mutex
+  std::optional<SourceObstruction> obstruction;        // guarded by mutex
 };
 
 Result<std::unique_ptr<DeviceSource>> DeviceSource::create(const DevicesSection& config) {
@@ -307,5 +310,10 @@ std::vector<api::DeviceHealth> DeviceSource::health() const {
 }
 
 std::uint64_t DeviceSource::heartbeat() const { return impl_->heartbeat.load(); }
+
+std::optional<SourceObstruction> DeviceSource::takeObstruction() {
+  const std::lock_guard lock(impl_->mutex);
+  return std::exchange(impl_->obstruction, std::nullopt);
+}
 
 }  // namespace vog::app

@@ -107,6 +107,11 @@ Status SimSource::failure() const {
   return {};
 }
 
+std::optional<SourceObstruction> SimSource::takeObstruction() {
+  const std::lock_guard lock(mutex_);
+  return std::exchange(obstruction_, std::nullopt);
+}
+
 double SimSource::pathLengthM() const {
   const std::lock_guard lock(mutex_);
   return path_length_m_;
@@ -188,6 +193,12 @@ void SimSource::run(SourceSink& sink) {
     const sim::StepResult step = simulation.step(step_samples);
     if (step.status == sim::MotionStatus::kBlocked) {
       ++collisions_;  // the vehicle stopped short of the scene; it holds until the next waypoint
+      if (const auto next = simulation.vehicle().nextWaypoint()) {
+        // Reported as the vehicle knows it: in its odometry frame.
+        const geometry::Pose3 T_odom_true = step_samples.T_odom_now * step_samples.T_true.inverse();
+        const std::lock_guard lock(mutex_);
+        obstruction_ = SourceObstruction{step_samples.T_odom_now.translation(), T_odom_true * next->xyz_world};
+      }
       (void)simulation.vehicle().setWaypoints({});
     }
     {

@@ -188,6 +188,7 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   bs.number("arrival_tolerance_m", w.arrival_tolerance_m, 0.001, 10.0);
   bs.degrees("arrival_tolerance_deg", w.arrival_tolerance_rad, 0.01, 180.0);
   bs.number("arrival_max_speed_mps", w.arrival_max_speed_mps, 0.001, 10.0);
+  bs.number("arrival_timeout_margin_s", w.arrival_timeout_margin_s, 0.0, 3600.0);
   double resend_s = 1e-9 * static_cast<double>(w.ack.resend_after_ns);
   bs.number("resend_after_s", resend_s, 0.1, 600.0);
   w.ack.resend_after_ns = std::llround(resend_s * 1e9);
@@ -288,6 +289,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   c.devices.feed.n_beams = c.mapping.builder.fan.n_beams;
   if (!c.devices.backseat_enabled) c.devices.feed.align_to_vehicle = false;
   c.devices.follower.speed_mps = c.planner.v_max_mps;
+  c.devices.follower.yaw_rate_radps = c.planner.yaw_rate_radps;
   // The exploration box goes to the planner; cross-field rules of each component.
   c.planner.box_min_world_m = c.mission.box_min_m;
   c.planner.box_max_world_m = c.mission.box_max_m;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 namespace vog::app {
 namespace {
@@ -29,6 +30,9 @@ Status WaypointFollowerConfig::validate() const {
   if (!(arrival_max_speed_mps > 0.0 && arrival_max_speed_mps <= 10.0))
     return bad("arrival_max_speed_mps", arrival_max_speed_mps, "(0, 10]");
   if (!(speed_mps > 0.0 && speed_mps <= 10.0)) return bad("speed_mps", speed_mps, "(0, 10]");
+  if (!(yaw_rate_radps > 0.0 && yaw_rate_radps <= 10.0)) return bad("yaw_rate_radps", yaw_rate_radps, "(0, 10]");
+  if (!(arrival_timeout_margin_s >= 0.0 && arrival_timeout_margin_s <= 3600.0))
+    return bad("arrival_timeout_margin_s", arrival_timeout_margin_s, "[0, 3600]");
   if (heartbeat_period_ns <= 0) return Error{"devices.backseat: the heartbeat period must be positive"};
   return ack.validate();
 }
@@ -63,6 +67,14 @@ std::optional<std::string> WaypointFollower::command(const SourceWaypoint& w_nav
   c.heading_deg = headingDegOf(w_nav.yaw_rad);
   ++stats_.commands_sent;
   target_ = w_nav;
+  // Twice the move at the limits (from where the vehicle is now), plus the margin.
+  double move_s = 0.0;
+  if (navigation_) {
+    const geometry::Pose3& T = navigation_->T_world_vehicle;
+    move_s = (w_nav.p_odom_m - T.translation()).norm() / config_.speed_mps +
+             std::abs(geometry::wrapAngle(w_nav.yaw_rad - geometry::yawOf(T.linear()))) / config_.yaw_rate_radps;
+  }
+  deadline_ns_ = now_ns + static_cast<std::int64_t>((2.0 * move_s + config_.arrival_timeout_margin_s) * 1e9);
   if (!config_.expect_acks) return backseat::encodeBackseat(c);
   auto sentence = acks_.send(c, now_ns);
   if (!sentence) {
@@ -117,7 +129,24 @@ std::vector<std::string> WaypointFollower::poll(std::int64_t now_ns, backseat::T
       front_commanded_ = true;
       break;
     }
-    if (!target_ || !arrived(*target_)) break;
+    if (!target_) break;
+    if (!arrived(*target_)) {
+      if (now_ns > deadline_ns_ && navigation_) {
+        ++stats_.timeouts;
+        const geometry::Pose3 T_odom_nav = T_nav_odom_.inverse();
+        obstruction_ = SourceObstruction{T_odom_nav * navigation_->T_world_vehicle.translation(),
+                                         T_odom_nav * target_->p_odom_m};
+        const Eigen::Vector3d p = navigation_->T_world_vehicle.translation();
+        std::ostringstream why;
+        why.setf(std::ios::fixed);
+        why.precision(2);
+        why << "waypoint not reached in time: the vehicle stopped at (" << p.x() << ", " << p.y() << ", " << p.z()
+            << "), " << (target_->p_odom_m - p).norm() << " m short";
+        target_.reset();
+        dropAll(why.str());
+      }
+      break;
+    }
     ++stats_.arrived;
     waypoints_.pop_front();
     front_commanded_ = false;

@@ -130,6 +130,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(da.follower.arrival_tolerance_m, db.follower.arrival_tolerance_m);
   EXPECT_NEAR(da.follower.arrival_tolerance_rad, db.follower.arrival_tolerance_rad, 1e-12);
   EXPECT_EQ(da.follower.arrival_max_speed_mps, db.follower.arrival_max_speed_mps);
+  EXPECT_EQ(da.follower.arrival_timeout_margin_s, db.follower.arrival_timeout_margin_s);
   EXPECT_EQ(da.follower.ack.resend_after_ns, db.follower.ack.resend_after_ns);
   EXPECT_EQ(da.follower.ack.max_attempts, db.follower.ack.max_attempts);
   EXPECT_EQ(a.api.max_frame_bytes, b.api.max_frame_bytes);

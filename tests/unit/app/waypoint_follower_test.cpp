@@ -118,6 +118,31 @@ TEST(WaypointFollower, RefusedOrUnacknowledgedCommandsDropTheListAndSayWhy) {
   EXPECT_NE(v.follower.lastError().find("no acknowledgement after 3 attempts"), std::string::npos) << v.follower.lastError();
 }
 
+TEST(WaypointFollower, AVehicleThatStopsShortIsReportedAsObstructed) {
+  Vehicle v;
+  v.at({0, 0, -2}, 0.0, 0.0);
+  // 2 m at 0.25 m/s: 8 s; twice that plus the 10 s margin is the deadline.
+  v.follower.setWaypoints({{Eigen::Vector3d(2, 0, -2), 0.0}, {Eigen::Vector3d(4, 0, -2), 0.0}});
+  v.poll();
+  v.ack(v.commands[0].id, true);
+  v.now += 20 * kS;
+  v.at({1.2, 0, -2}, 0.0, 0.0);  // stopped 0.8 m short
+  v.poll();
+  EXPECT_FALSE(v.follower.idle());
+  EXPECT_FALSE(v.follower.takeObstruction().has_value());
+  v.now += 7 * kS;  // 27 s > 26 s
+  v.poll();
+  EXPECT_TRUE(v.follower.idle());
+  EXPECT_EQ(v.follower.stats().timeouts, 1u);
+  EXPECT_EQ(v.commands.size(), 1u);  // the second waypoint was never sent
+  EXPECT_NE(v.follower.lastError().find("0.80 m short"), std::string::npos) << v.follower.lastError();
+  const auto stopped = v.follower.takeObstruction();
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_LT((stopped->p_odom_m - Eigen::Vector3d(1.2, 0, -2)).norm(), 1e-9);
+  EXPECT_LT((stopped->target_odom_m - Eigen::Vector3d(2, 0, -2)).norm(), 0.005);
+  EXPECT_FALSE(v.follower.takeObstruction().has_value());  // once
+}
+
 TEST(WaypointFollower, AnEmptyListHoldsTheVehicleWhereItIs) {
   Vehicle v;
   v.follower.setWaypoints({});

@@ -98,6 +98,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   Status persistUpdate(const slam::MappingUpdate& update);
   void publishMappingState();
   geometry::Pose3 estimatedPose() const;  // map frame
+  geometry::Pose3 mapFromSource() const;  // T_map_source: the source's odometry frame in the map (locks state)
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
   // Logs and journals a mission state; the caller holds state_mutex_.
   void recordStateLocked(mission::MissionState state);

@@ -43,6 +43,7 @@ class SimSource final : public VehicleSource {
   std::vector<api::DeviceHealth> health() const override;
   std::uint64_t heartbeat() const override { return heartbeat_.load(); }
   Status failure() const override;
+  std::optional<SourceObstruction> takeObstruction() override;  // a move the collision check refused
 
   // The scene's exploration box and start pose (the daemon's defaults for a simulated mission).
   const Eigen::AlignedBox3d& sceneBox() const { return scene_box_; }
@@ -70,6 +71,7 @@ class SimSource final : public VehicleSource {
   bool stopping_ = false;                               // guarded by mutex_
   std::optional<Error> failure_;                        // guarded by mutex_
   double path_length_m_ = 0.0;                          // guarded by mutex_
+  std::optional<SourceObstruction> obstruction_;        // guarded by mutex_
   std::atomic<bool> vehicle_idle_{true};
   std::atomic<std::uint64_t> heartbeat_{0};
   std::atomic<std::uint64_t> scans_{0};

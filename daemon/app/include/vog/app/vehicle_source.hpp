@@ -43,6 +43,13 @@ struct SourceWaypoint {
   double yaw_rad = 0.0;
 };
 
+// The vehicle stopped short of a waypoint (an obstacle, a refused move): where it stopped and where
+// it was going, odometry frame.
+struct SourceObstruction {
+  Eigen::Vector3d p_odom_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d target_odom_m = Eigen::Vector3d::Zero();
+};
+
 class VehicleSource {
  public:
   virtual ~VehicleSource() = default;
@@ -59,6 +66,8 @@ class VehicleSource {
   virtual std::uint64_t heartbeat() const = 0;
   // The source's own error (e.g. the simulator failed), if it stopped producing because of one.
   virtual Status failure() const = 0;
+  // The newest obstruction since the last call, once (the vehicle then holds and is idle).
+  virtual std::optional<SourceObstruction> takeObstruction() = 0;
   // True when the odometry frame outlives the daemon (the vehicle's own navigation frame): after a
   // restart the new odometry continues the old frame. False (the simulator): a restarted source
   // starts a new frame, aligned by the daemon at its first sample.

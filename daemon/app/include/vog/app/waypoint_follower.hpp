@@ -5,7 +5,10 @@
 // when the vehicle's own navigation ($BFNVG, $BFNVR) says it arrived: within the position and
 // heading tolerances and slower than the arrival speed. An empty list holds the vehicle where its
 // navigation says it is. A refused or unacknowledged command drops the rest of the list (the
-// planner replans from where the vehicle is); `lastError()` says why. Without a backseat
+// planner replans from where the vehicle is); `lastError()` says why. A waypoint not reached
+// within twice the time the move takes at the speed and yaw-rate limits plus a margin (the vehicle
+// stopped short: an obstacle, a controller that gave up) also drops the list, and is reported as an
+// obstruction where the vehicle stopped. Without a backseat
 // (`expect_acks` false) the same logic runs on the daemon's own odometry and nothing is sent.
 //
 // Frames: waypoints come in the daemon's odometry frame; the vehicle steers in its navigation
@@ -29,6 +32,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vog::app {
@@ -38,6 +42,8 @@ struct WaypointFollowerConfig {
   double arrival_tolerance_rad = geometry::deg2rad(3.0);
   double arrival_max_speed_mps = 0.03;
   double speed_mps = 0.25;              // thesis Table 4.2, v_max
+  double yaw_rate_radps = 0.15;         // thesis Table 4.2, psi (for the arrival timeout)
+  double arrival_timeout_margin_s = 10.0;  // added to twice the time the move takes
   // False without a backseat link (the waypoints reach the vehicle's controller some other way,
   // e.g. the API's waypoint stream): commands are not tracked and arrival is judged on the
   // navigation given, this daemon's own odometry.
@@ -54,7 +60,9 @@ struct FollowerStats {
   std::uint64_t accepted = 0;
   std::uint64_t refused = 0;         // refused or never acknowledged
   std::uint64_t arrived = 0;
+  std::uint64_t timeouts = 0;        // not reached in time
 };
+
 
 class WaypointFollower {
  public:
@@ -76,6 +84,8 @@ class WaypointFollower {
   const std::string& lastError() const { return last_error_; }
   // The command in force, navigation frame (x, y, z; yaw), if any.
   std::optional<SourceWaypoint> target() const { return target_; }
+  // The obstruction of the last timeout, once.
+  std::optional<SourceObstruction> takeObstruction() { return std::exchange(obstruction_, std::nullopt); }
 
  private:
   std::optional<std::string> command(const SourceWaypoint& w_nav, std::int64_t now_ns, backseat::TimeOfDay time);
@@ -90,12 +100,14 @@ class WaypointFollower {
   bool front_commanded_ = false;
   bool hold_pending_ = false;                   // an empty list arrived: command a hold once
   std::optional<SourceWaypoint> target_;        // navigation frame of the command in force
+  std::int64_t deadline_ns_ = 0;                // the front waypoint counts as not reached after this
   std::optional<std::uint32_t> outstanding_id_;  // sent, not yet acknowledged
   std::uint32_t next_id_ = 1;
   geometry::Pose3 T_nav_odom_ = geometry::Pose3::Identity();
   std::optional<VehicleNavigation> navigation_;  // newest
   FollowerStats stats_;
   std::string last_error_;
+  std::optional<SourceObstruction> obstruction_;
 };
 
 }  // namespace vog::app

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <vector>
 
 namespace vog::sim {
@@ -81,6 +82,10 @@ class VehicleModel {
   const VehicleState& state() const { return state_; }
   const VehicleConfig& config() const { return config_; }
   std::size_t waypointsLeft() const { return waypoints_.size(); }
+  // The waypoint being followed (the front of the list), if any.
+  std::optional<Waypoint> nextWaypoint() const {
+    return waypoints_.empty() ? std::nullopt : std::optional<Waypoint>(waypoints_.front());
+  }
   bool blocked() const { return blocked_; }
   // Number of refused moves so far.
   std::uint64_t collisionCount() const { return collisions_; }
