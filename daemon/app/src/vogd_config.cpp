@@ -70,6 +70,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.choice("mode", mode, {"degenerate", "p2p"});
   lc.mode = mode == "p2p" ? slam::LoopClosureMode::kPointToPoint2d : slam::LoopClosureMode::kDegenerate;
   l.number("max_fitness_m2", lc.acceptance.max_fitness_m2, 1e-6, 10.0);
+  l.number("p2p_max_fitness_m2", lc.p2p_max_fitness_m2, 1e-6, 10.0);
   l.number("max_direction_stddev", lc.point_to_plane.max_direction_stddev, 1e-6, 10.0);
   l.number("sigma_point_m", lc.point_to_plane.sigma_point_m, 1e-4, 10.0);
   double corr = lc.point_to_plane.max_correspondence_distance_m;

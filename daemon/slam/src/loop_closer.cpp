@@ -55,6 +55,9 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: point_to_plane: " + s.error().message};
   }
   if (Status s = acceptance.validate(); !s.ok()) return Error{"loop closer config: acceptance: " + s.error().message};
+  if (!(p2p_max_fitness_m2 > 0.0) || !std::isfinite(p2p_max_fitness_m2)) {
+    return Error{"loop closer config: p2p_max_fitness_m2 = " + std::to_string(p2p_max_fitness_m2) + " must be positive"};
+  }
   if (!(max_heading_difference_rad > 0.0 && max_heading_difference_rad <= std::numbers::pi)) {
     return Error{"loop closer config: max_heading_difference_rad = " + std::to_string(max_heading_difference_rad) +
                  " must be in (0, pi]"};
@@ -127,7 +130,9 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
       continue;
     }
     const double dt_s = 1e-9 * static_cast<double>(source.first_stamp_ns - target.first_stamp_ns);
-    const IcpAcceptance acc = checkIcpAcceptance(icp.value(), T_prior, dt_s, config_.acceptance);
+    IcpAcceptanceConfig bounds = config_.acceptance;
+    if (config_.mode == LoopClosureMode::kPointToPoint2d) bounds.max_fitness_m2 = config_.p2p_max_fitness_m2;
+    const IcpAcceptance acc = checkIcpAcceptance(icp.value(), T_prior, dt_s, bounds);
     if (!acc.accepted) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason[reasonKey(icp.value(), acc)];

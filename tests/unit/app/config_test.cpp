@@ -64,6 +64,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.loop_closures, b.mapping.loop_closures);
   EXPECT_EQ(la.mode, lb.mode);
   EXPECT_EQ(la.acceptance.max_fitness_m2, lb.acceptance.max_fitness_m2);
+  EXPECT_EQ(la.p2p_max_fitness_m2, lb.p2p_max_fitness_m2);
   EXPECT_EQ(la.point_to_plane.max_direction_stddev, lb.point_to_plane.max_direction_stddev);
   EXPECT_EQ(la.point_to_plane.sigma_point_m, lb.point_to_plane.sigma_point_m);
   EXPECT_EQ(la.point_to_plane.max_correspondence_distance_m, lb.point_to_plane.max_correspondence_distance_m);

@@ -46,6 +46,10 @@ struct LoopCloserConfig {
   // registrations stuck between two blades through on the propeller orbit (vog-bench slam, seeds
   // 1-5); the yaw check and the robust loss keep their effect on the reconstruction within 3 mm.
   IcpAcceptanceConfig acceptance{0.05, 0.00138, 0.00138};
+  // The fitness bound of kPointToPoint2d, which replaces acceptance.max_fitness_m2 in that mode: its
+  // fitness is the mean squared point-to-point distance in 2-D, larger than the point-to-plane
+  // residual of the same alignment; 0.015 m^2 is where its wrong propeller registrations began.
+  double p2p_max_fitness_m2 = 0.015;
   // Viewing-direction gate, added to Alg. 6: a profiling sonar only sees the faces of objects turned
   // towards it, so two submaps whose base headings differ much see different faces of the same pilings
   // (the near halves of a cylinder seen from opposite sides are 2 r apart) and ICP aligns them with a
