@@ -106,6 +106,7 @@ void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
   m.boolean("gain_along_edge", c.gain_along_edge);
   m.number("assume_free_radius_m", c.assume_free_radius_m, 0.0, 100.0);
   m.number("root_tolerance_m", c.root_tolerance_m, 0.0, 10.0);
+  m.number("obstruction_retreat_m", c.obstruction_retreat_m, 0.0, 5.0);
   m.number("gain_unknown", c.gain_unknown, 0.0, 1e6);
   m.number("gain_free", c.gain_free, 0.0, 1e6);
   m.number("gain_occupied", c.gain_occupied, 0.0, 1e6);

@@ -92,6 +92,7 @@ std::optional<Eigen::Vector3d> NbvPlanner::reportObstruction(const Eigen::Vector
   obstructions_.push_back(q);
   if (grid_) grid_->markObstructed(q, resolution_m_);
   seed_branch_.clear();
+  pending_retreat_ = p_world - config_.obstruction_retreat_m * d;
   return q;
 }
 
@@ -131,6 +132,17 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   PlanResult result;
   result.map_version = map.version();
   tree_.clear();
+  if (const std::optional<Eigen::Vector3d> back = std::exchange(pending_retreat_, std::nullopt)) {
+    // Stopped by an obstruction: first back off the way the vehicle came (the one direction known
+    // to be clear), then plan from there.
+    result.status = PlanStatus::kExplore;
+    result.waypoints = {Waypoint{*back, current.yaw_rad}};
+    result.best_branch = {current, result.waypoints.front()};
+    result.tree_size = 1;
+    result.reason = "backing off an obstruction to " + describe(*back);
+    tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
+    return result;
+  }
   std::vector<Waypoint> seed;
   seed.swap(seed_branch_);
   // The vehicle stops within its navigation and control error of the safe waypoint it was sent to,

@@ -58,6 +58,8 @@ Status PlannerConfig::validate() const {
   if (!nonNegativeFinite(gain_occupied)) return Error{bad("gain_occupied", gain_occupied, ">= 0")};
   if (!nonNegativeFinite(gain_threshold)) return Error{bad("gain_threshold", gain_threshold, ">= 0")};
   if (!positiveFinite(global_spacing_m)) return Error{bad("global_spacing_m", global_spacing_m, "> 0")};
+  if (!nonNegativeFinite(obstruction_retreat_m) || obstruction_retreat_m > 5.0)
+    return Error{bad("obstruction_retreat_m", obstruction_retreat_m, "[0, 5]")};
   if (!nonNegativeFinite(global_min_gain)) return Error{bad("global_min_gain", global_min_gain, ">= 0")};
   if (global_max_candidates < 1 || global_max_candidates > 1000000)
     return Error{bad("global_max_candidates", global_max_candidates, "[1, 1e6]")};

@@ -95,6 +95,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(pa.gain_along_edge, pb.gain_along_edge);
   EXPECT_EQ(pa.assume_free_radius_m, pb.assume_free_radius_m);
   EXPECT_EQ(pa.root_tolerance_m, pb.root_tolerance_m);
+  EXPECT_EQ(pa.obstruction_retreat_m, pb.obstruction_retreat_m);
   EXPECT_EQ(pa.gain_unknown, pb.gain_unknown);
   EXPECT_EQ(pa.gain_free, pb.gain_free);
   EXPECT_EQ(pa.gain_occupied, pb.gain_occupied);

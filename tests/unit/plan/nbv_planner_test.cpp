@@ -472,8 +472,14 @@ TEST_F(PlannerMaps, AReportedObstructionBlocksTheWayAheadAndLeadsElsewhere) {
   EXPECT_FALSE(g->isSafe(*q));
   EXPECT_LT(g->safeCount(), safe_before);
   EXPECT_TRUE(g->isSafe(Eigen::Vector3d(-3.5, 0.0, -1.75)));  // away from it nothing changed
-  // The next plan goes elsewhere: no waypoint or tree edge passes through the blocked point.
-  const PlanResult r = planner->plan(map, {stopped + Eigen::Vector3d(-0.4, 0, 0), 0.0}).value();
+  // The next plan backs off 0.3 m the way the vehicle came, keeping its heading.
+  const PlanResult back = planner->plan(map, {stopped, 0.0}).value();
+  ASSERT_EQ(back.status, PlanStatus::kExplore);
+  ASSERT_EQ(back.waypoints.size(), 1u);
+  EXPECT_LT((back.waypoints[0].p_world - Eigen::Vector3d(-2.3, 0.0, -1.75)).norm(), 1e-9);
+  EXPECT_EQ(back.waypoints[0].yaw_rad, 0.0);
+  // The one after goes elsewhere: no waypoint or tree edge passes through the blocked point.
+  const PlanResult r = planner->plan(map, {back.waypoints[0].p_world, 0.0}).value();
   for (const TreeNode& n : planner->lastTree()) EXPECT_GT((n.w.p_world - *q).norm(), 0.5);
   for (const Waypoint& w : r.waypoints) EXPECT_GT((w.p_world - *q).norm(), 0.5);
   // A snapshot of another map (a rebuild) keeps the obstruction.

@@ -51,6 +51,9 @@ struct PlannerConfig {
   // of a safe waypoint, and a loop closure can move the estimate (not the vehicle) by tens of
   // centimetres (our choice: half the collision box's side; vog-bench mission).
   double root_tolerance_m = 0.5;
+  // After an obstruction (NbvPlanner::reportObstruction) the vehicle first backs off this far the way
+  // it came: three voxels, more than the any-heading box's one-voxel margin.
+  double obstruction_retreat_m = 0.3;
   // false: Bircher 2016's sampling (the thesis's baseline): uniform in the box, any heading.
   bool constrained_sampling = true;
   // false: gain of the edge's end pose only (Bircher 2016, the thesis's baseline); true: the fan
