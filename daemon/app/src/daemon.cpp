@@ -718,7 +718,11 @@ Status Daemon::run() {
   work.reset();
   asio::post(io_, [this] { io_.stop(); });
   if (io_thread_.joinable()) io_thread_.join();
-  spdlog::info("stopped in {} ms", std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count());
+  {
+    const std::lock_guard lock(queue_mutex_);
+    spdlog::info("stopped in {} ms ({} scans outside a mission were recorded, not mapped)",
+                 std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count(), scans_not_mapped_);
+  }
   const std::lock_guard lock(state_mutex_);
   if (failure_) return *failure_;
   return {};
