@@ -483,10 +483,10 @@ void Daemon::planningLoop() {
     if (auto stopped = source_->takeObstruction(); stopped && planner_) {
       const Pose3 T_map_source = mapFromSource();
       const Eigen::Vector3d p = T_map_source * stopped->p_odom_m;
-      if (auto q = planner_->reportObstruction(p, T_map_source * stopped->target_odom_m))
-        spdlog::warn("planner: the vehicle was stopped at ({:.2f}, {:.2f}, {:.2f}); ({:.2f}, {:.2f}, {:.2f}) is blocked "
-                     "from now on",
-                     p.x(), p.y(), p.z(), q->x(), q->y(), q->z());
+      if (auto back = planner_->reportObstruction(p, T_map_source * stopped->target_odom_m))
+        spdlog::warn("planner: the vehicle was stopped short at ({:.2f}, {:.2f}, {:.2f}); backing off to ({:.2f}, {:.2f}, "
+                     "{:.2f})",
+                     p.x(), p.y(), p.z(), back->x(), back->y(), back->z());
     }
     if (!planner_ || !source_->idle()) {
       const std::lock_guard lock(state_mutex_);

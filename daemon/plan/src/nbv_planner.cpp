@@ -75,7 +75,6 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
                                         {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
-  for (const Eigen::Vector3d& q : obstructions_) grid_->markObstructed(q, resolution_m_);
   return {};
 }
 
@@ -83,17 +82,11 @@ std::optional<Eigen::Vector3d> NbvPlanner::reportObstruction(const Eigen::Vector
                                                              const Eigen::Vector3d& target_world) {
   if (!p_world.allFinite() || !target_world.allFinite()) return std::nullopt;
   Eigen::Vector3d d = target_world - p_world;
-  d.z() = 0.0;  // depth is held by the vehicle; contacts are ahead of it
-  if (d.norm() < 1e-6) return std::nullopt;  // it was turning on the spot: no direction to block
-  d.normalize();
-  // Just beyond the box's front face at any heading (half its horizontal diagonal) plus one voxel.
-  const double reach_m = 0.5 * config_.collision_box_m.head<2>().norm() + std::max(resolution_m_, 0.05);
-  const Eigen::Vector3d q = p_world + reach_m * d;
-  obstructions_.push_back(q);
-  if (grid_) grid_->markObstructed(q, resolution_m_);
+  d.z() = 0.0;  // depth is held by the vehicle; what stopped it was ahead
+  if (d.norm() < 1e-6) return std::nullopt;
+  pending_retreat_ = p_world - config_.obstruction_retreat_m * d.normalized();
   seed_branch_.clear();
-  pending_retreat_ = p_world - config_.obstruction_retreat_m * d;
-  return q;
+  return pending_retreat_;
 }
 
 void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded) {

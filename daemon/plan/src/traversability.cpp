@@ -162,9 +162,9 @@ void TraversabilityGrid::recompute(KeyBox region) {
       windowOr(
           region.min.x(), region.max.x(), r_.x(),
           [&](int x) -> int {
-            if (x < grid_.min.x() || x > grid_.max.x()) return 1;
-            const std::size_t i = row + static_cast<std::size_t>(x - grid_.min.x());
-            return status_[i] != kFree || (!obstructed_.empty() && obstructed_[i] != 0) ? 1 : 0;
+            return x < grid_.min.x() || x > grid_.max.x()
+                       ? 1
+                       : (status_[row + static_cast<std::size_t>(x - grid_.min.x())] != kFree ? 1 : 0);
           },
           [&](int x, bool v) { ox.v[ox.index(x, y, z)] = v ? 1 : 0; });
     }
@@ -183,28 +183,6 @@ void TraversabilityGrid::recompute(KeyBox region) {
           [&](int z) -> int { return z < b.min.z() || z > b.max.z() ? 1 : oy.v[oy.index(x, y, z)]; },
           [&](int z, bool v) { safe_[indexOf(VoxelKey(x, y, z))] = v ? 0 : 1; });
     }
-}
-
-std::size_t TraversabilityGrid::markObstructed(const Eigen::Vector3d& p_world, double radius_m) {
-  const int n = static_cast<int>(std::ceil(radius_m * inv_resolution_));
-  const VoxelKey c = map::pointToKey(p_world, inv_resolution_);
-  KeyBox region{c - VoxelKey::Constant(n), c + VoxelKey::Constant(n)};
-  region = intersect(region, grid_);
-  if (region.empty()) return 0;
-  if (obstructed_.empty()) obstructed_.assign(status_.size(), 0);
-  std::size_t marked = 0;
-  for (int z = region.min.z(); z <= region.max.z(); ++z)
-    for (int y = region.min.y(); y <= region.max.y(); ++y)
-      for (int x = region.min.x(); x <= region.max.x(); ++x) {
-        const VoxelKey k(x, y, z);
-        if ((map::keyToCentre(k, resolution_) - p_world).norm() > radius_m) continue;
-        obstructed_[indexOf(k)] = 1;
-        ++marked;
-      }
-  region.min -= r_;
-  region.max += r_;
-  recompute(region);
-  return marked;
 }
 
 Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) {

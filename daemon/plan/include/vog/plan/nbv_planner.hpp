@@ -89,13 +89,11 @@ class NbvPlanner {
   Result<PlanResult> plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current);
 
   // The vehicle was stopped at p_world on its way to target_world by something the map does not
-  // show (its estimate and the map disagree, or an unmapped obstacle): the space just ahead of its
-  // box, toward the target, is blocked from now on (the traversability grid treats it as occupied,
-  // inflated by the box), and the kept branch is dropped, so the next plan leads elsewhere; the
-  // next plan() first backs the vehicle off by obstruction_retreat_m the way it came (kExplore with
-  // that one waypoint). Returns the blocked point. Non-finite input changes nothing and gives nullopt.
+  // show (its estimate and the map disagree, or an unmapped obstacle): the next plan() first backs
+  // it off by obstruction_retreat_m the way it came (kExplore with that one waypoint), and the kept
+  // branch, which led there, is dropped. Returns the retreat position; non-finite input, or no
+  // direction (it was turning on the spot), changes nothing and gives nullopt.
   std::optional<Eigen::Vector3d> reportObstruction(const Eigen::Vector3d& p_world, const Eigen::Vector3d& target_world);
-  const std::vector<Eigen::Vector3d>& obstructions() const { return obstructions_; }
 
   // The tree of the last plan() call (tests and plots).
   const std::vector<TreeNode>& lastTree() const { return tree_; }
@@ -127,7 +125,6 @@ class NbvPlanner {
   double resolution_m_ = 0.0;
   std::vector<Waypoint> seed_branch_;  // best branch of the last call after its first edge
   std::vector<Eigen::Vector3d> global_goals_;  // goals chosen by the global search so far
-  std::vector<Eigen::Vector3d> obstructions_;  // blocked points (reportObstruction), map frame
   std::optional<Eigen::Vector3d> pending_retreat_;  // where the next plan() backs off to
   std::vector<TreeNode> tree_;
 };

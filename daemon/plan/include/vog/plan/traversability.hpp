@@ -16,10 +16,6 @@
 // classifies it): a dense copy of the snapshot over the box that the gain's beam walks read at a
 // fraction of the cost of hashed block lookups.
 //
-// Obstructions: places where the vehicle was stopped by something the map does not show (a contact
-// reported by the vehicle) count as blocked like occupied voxels, inflated by the box, and stay so
-// through update(). A rebuild starts without them (the planner re-applies its own).
-//
 // Lifecycle: built from one snapshot; update() catches up with a newer snapshot of the same MergedMap
 // writer by re-reading only the blocks changed or removed since the version it reflects and
 // recomputing the safe flags in the bounding box of those blocks dilated by r (the result equals a
@@ -59,10 +55,6 @@ class TraversabilityGrid {
   // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot with an
   // older version than the grid's, or of another resolution, gives an error (the caller rebuilds).
   Result<TraversabilityUpdate> update(const map::MergedMap& newer);
-
-  // Marks the voxels whose centres lie within radius_m of p (world) as obstructed and recomputes the
-  // safe flags around them. Returns the number of voxels marked (0: p is outside the grid).
-  std::size_t markObstructed(const Eigen::Vector3d& p_world, double radius_m);
 
   // Is a collision box centred at p (world) inside the exploration box and in known free space?
   bool isSafe(const Eigen::Vector3d& p_world) const;
@@ -126,7 +118,6 @@ class TraversabilityGrid {
   Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
   std::vector<std::uint8_t> status_;  // map::Occupancy per voxel
   std::vector<std::uint8_t> safe_;   // 1 = a box centred in this voxel is in known free space
-  std::vector<std::uint8_t> obstructed_;  // 1 = blocked by an obstruction; empty until the first
   std::uint64_t map_version_ = 0;
 };
 
