@@ -1,4 +1,4 @@
-// `vogctl mission start|pause|resume|abort|return-home|set-box`: operator commands (issue 7's mission
+// `vogctl mission start|pause|resume|abort|return-home|set-box`: operator commands (the mission
 // lifecycle). They need the operator secret; vogd answers with the mission state or a refusal.
 
 #include "command_util.hpp"

@@ -1,6 +1,6 @@
 // vog-bench api: vogd's API on loopback. 32 observers subscribed to every stream and 1 operator
 // sending commands while waypoints and poses are published: waypoint latency from publishWaypoint()
-// to the client's receipt (p50/p99/max; issue 7 target p99 <= 10 ms). Then a snapshot of a merged
+// to the client's receipt (p50/p99/max; target p99 <= 10 ms). Then a snapshot of a merged
 // map of about one million known voxels fetched from version 0 by one client (target <= 1 s).
 // Server and clients share this process (and its 2 cores); RSS and CPU are the whole process's.
 #include "bench_registry.hpp"

@@ -1,5 +1,5 @@
 // vog-bench evaluate: scores a mission that vogd ran on the built-in simulator against the simulator's
-// ground truth, with the figures of `vog-bench mission` (issue 5): coverage of the observable surface,
+// ground truth, with the figures of `vog-bench mission`: coverage of the observable surface,
 // reconstruction RMSE (occupied voxels of the final map against the same scans at their true poses,
 // after a rigid alignment and without), path length, submaps, loop closures, and the planning and merge
 // times vogd recorded. Reads only the mission folder (journal, submaps, raw log with the truth records,

@@ -1,4 +1,4 @@
-// vog-bench persist: cost of mission persistence on the mapping thread (issue 7). Runs the mapping
+// vog-bench persist: cost of mission persistence on the mapping thread. Runs the mapping
 // pipeline over the drifting synthetic orbit of the slam tests with a MissionStore attached and reports
 // the time to persist one closed submap (its .ot written atomically + the journal group fsync'ed), the
 // journal and .ot sizes, the time to reopen the mission and restore the pipeline, and the latency of a

@@ -51,7 +51,7 @@ struct ReconstructionError {
 Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3d>& estimate_world,
                                                 const ReferenceReconstruction& reference);
 
-// Coverage (issue 5): the share of `points` (world frame) within `radius_m` of an occupied voxel of `map`.
+// Coverage: the share of `points` (world frame) within `radius_m` of an occupied voxel of `map`.
 double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m);
 
 }  // namespace vog::bench

@@ -1,6 +1,6 @@
 #pragma once
 // A test double of vogd behind the API: a real MergedMap built from LocalGrids of the synthetic pier,
-// a real mission state machine (the lifecycle of issue 7), a reconstruction cloud, and a logger that
+// a real mission state machine (the mission lifecycle), a reconstruction cloud, and a logger that
 // records what the server reports.
 
 #include "map_fixtures.hpp"
@@ -83,7 +83,7 @@ class FakeBackend final : public ApiBackend {
 
   std::shared_ptr<const Cloud> cloud() const override { return cloud_; }
 
-  // The mission lifecycle of issue 7; refusals name the state.
+  // The mission lifecycle; refusals name the state.
   Result<MissionState> command(const MissionCommand& c) override {
     std::lock_guard lock(mutex_);
     using K = MissionCommand::Kind;

@@ -1,4 +1,4 @@
-// The mission lifecycle of issue 7: every allowed transition, every refusal named, events that race
+// The mission lifecycle: every allowed transition, every refusal named, events that race
 // with operator commands ignored.
 #include "vog/mission/mission_control.hpp"
 

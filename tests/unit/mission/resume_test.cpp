@@ -1,4 +1,4 @@
-// Resume equivalence (issue 7): a MappingPipeline persisted through MissionStore, "crashed" after N
+// Resume equivalence: a MappingPipeline persisted through MissionStore, "crashed" after N
 // submaps (objects dropped, together with the active submap's scans), reopened, restored and fed the
 // scans from the first one after the last closed submap ends bit-identical to a pipeline that never
 // stopped: same graph estimates, VogMap poses, submap records and loop closures. The restored pipeline

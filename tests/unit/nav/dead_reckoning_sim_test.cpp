@@ -1,4 +1,4 @@
-// Dead reckoning against simulator ground truth (issue 6, "Tests and figures"): the vehicle model
+// Dead reckoning against simulator ground truth: the vehicle model
 // drives a lawnmower survey through the pilings scene; the navigation sensor models are sampled at
 // their configured rates; every sample goes to the wire through the codec encoders (PD0 ensemble
 // with bottom track in instrument coordinates, IMU CAN frames, Digiquartz reply line), comes back

@@ -69,7 +69,7 @@ WallPair makeClouds(const std::vector<Plane>& planes, double normal_noise_rad) {
   return w;
 }
 
-// Issue 4 test (1): a single flat wall.
+// Test (1): a single flat wall.
 TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry) {
   const WallPair w = makeClouds({wallX()}, 0.05);
   Vector6d x_odom = toXyzRpy(kTruth);
@@ -115,7 +115,7 @@ TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry)
   EXPECT_TRUE(closure->covariance.isApprox(expected_cov, 1e-9));
 }
 
-// Issue 4 test (2): a corner; full rank; truth recovered within 2 cm / 0.5 deg from 0.3 m / 3 deg.
+// Test (2): a corner; full rank; truth recovered within 2 cm / 0.5 deg from 0.3 m / 3 deg.
 TEST(DegeneracyAwareIcp, CornerIsFullRankAndRecoversTruth) {
   const WallPair w = makeClouds({wallX(), wallY()}, 0.02);
   const Vector6d xt = toXyzRpy(kTruth);

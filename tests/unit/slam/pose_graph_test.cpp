@@ -173,7 +173,7 @@ TEST(PoseGraph, LoopClosuresCorrectDrift) {
   EXPECT_NEAR(x0(kYaw), toXyzRpy(s.truth[0])(kYaw), 1e-12);
 }
 
-// Issue 4 test (3): random wrong closures are down-weighted by the robust loss.
+// Test (3): random wrong closures are down-weighted by the robust loss.
 TEST(PoseGraph, OutlierClosuresDownWeightedByCauchyLoss) {
   const Scenario s = makeScenario(3, 40);
   auto addOutliers = [&](PoseGraph& g) {

@@ -17,7 +17,7 @@
 
 namespace vog::api {
 
-// Mission lifecycle (issue 7): idle -> exploring -> returning -> complete, plus paused and aborted.
+// Mission lifecycle: idle -> exploring -> returning -> complete, plus paused and aborted.
 enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted };
 enum class PlannerState : std::uint8_t { kIdle, kPlanning, kFollowing, kFinished, kFailed };
 enum class DeviceState : std::uint8_t { kOk, kDegraded, kFailed, kDisconnected };

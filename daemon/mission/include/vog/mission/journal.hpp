@@ -73,7 +73,7 @@ struct WaypointRecord {
   double yaw_rad = 0.0;
 };
 
-// Mission lifecycle (issue 7); same values as the API's MissionState.
+// Mission lifecycle; same values as the API's MissionState.
 enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted };
 const char* toString(MissionState state);
 

@@ -1,5 +1,5 @@
 #pragma once
-// MissionControl: the mission lifecycle of vogd (issue 7) as a pure state machine.
+// MissionControl: the mission lifecycle of vogd as a pure state machine.
 //
 //   idle --start--> exploring --planner done--> returning --arrived home--> complete
 //   exploring|returning --pause--> paused --resume--> (the state it was paused in)

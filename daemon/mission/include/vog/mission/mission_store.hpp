@@ -1,5 +1,5 @@
 #pragma once
-// MissionStore: one mission directory, everything needed to resume after a crash (issue 7):
+// MissionStore: one mission directory, everything needed to resume after a crash:
 //   <dir>/journal.vogj    the journal (journal.hpp): submap groups, waypoints, mission states
 //   <dir>/submaps/*.ot     the closed submaps' grids (submap_store.hpp)
 // (the raw device log, raw_log.hpp, lives next to them as <dir>/raw.vogr, owned by the drivers' side).

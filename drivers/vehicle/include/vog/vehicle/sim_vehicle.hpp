@@ -1,5 +1,5 @@
 #pragma once
-// The simulated vehicle behind mock devices (issue 7, "Bench test"): the lockstep simulation of
+// The simulated vehicle behind mock devices: the lockstep simulation of
 // drivers/sim paced at `speedup` times wall time, its samples put on the real wire protocols by
 // the mock devices of drivers/mock, and the backseat link closing the loop:
 //   DVL    PD0 ensembles (bottom track, instrument frame) on a pseudo-terminal, 5 Hz
