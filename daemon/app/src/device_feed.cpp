@@ -81,7 +81,7 @@ Result<DeviceFeed> DeviceFeed::create(const DeviceFeedConfig& config) {
 DeviceCounters& DeviceFeed::counter(DeviceId device) { return counters_[indexOf(device)]; }
 const DeviceCounters& DeviceFeed::counters(DeviceId device) const { return counters_[indexOf(device)]; }
 
-std::uint64_t DeviceFeed::droppedBytes(DeviceId device) const {
+std::uint64_t DeviceFeed::droppedInput(DeviceId device) const {
   auto dropped = [](const codec::StreamStats& s) { return s.garbage_bytes + s.overflow_bytes + s.badFrames(); };
   switch (device) {
     case DeviceId::kDvl: return dropped(pd0_.stats()) + dropped(pd6_.stats());

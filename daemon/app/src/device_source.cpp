@@ -168,7 +168,7 @@ struct DeviceSource::Impl {
       h.state = stateOf(*link, stale);
       h.last_stamp_ns = c.last_stamp_ns;
       h.messages = c.messages;
-      h.errors = c.rejected + feed.droppedBytes(d) + link->errors;
+      h.errors = c.rejected + feed.droppedInput(d) + link->errors;
       if (link->state != io::LinkState::kConnected) detail = link->reason + (detail.empty() ? "" : "; " + detail);
       if (!c.last_error.empty()) detail += (detail.empty() ? "" : "; ") + std::string("last rejected: ") + c.last_error;
       h.detail = detail;

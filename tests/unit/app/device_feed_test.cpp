@@ -160,7 +160,7 @@ TEST(DeviceFeed, ScansAreMappedAtTheAlignedDeadReckoningPose) {
   ASSERT_GT(run.odometry.size(), 90u);
   for (std::size_t i = 1; i < run.odometry.size(); ++i) EXPECT_GE(run.odometry[i].stamp_ns, run.odometry[i - 1].stamp_ns);
   // Garbage before an ensemble is skipped and decoding goes on.
-  EXPECT_GE(feed->droppedBytes(DeviceId::kDvl), 64u);
+  EXPECT_GE(feed->droppedInput(DeviceId::kDvl), 64u);
   EXPECT_EQ(feed->deadReckoning(20'002 * kMs).dvl_used, 101u);
   EXPECT_FALSE(feed->deadReckoning(20'002 * kMs).degraded) << feed->deadReckoning(20'002 * kMs).reason;
 }
@@ -191,6 +191,47 @@ TEST(DeviceFeed, BackseatNavigationIsInterpolatedToThePing) {
     EXPECT_LT((s.T_world_vehicle_odom.translation() - expected).norm(), 0.005) << s.scan.stamp_ns;
   }
   EXPECT_EQ(run.odometry.size(), 96u);  // one per $BFNVG
+}
+
+// Damaged or impossible input stops at the feed: a sentence with a NaN or a bad checksum, a sonar
+// datagram cut short, a PD0 ensemble with a broken checksum; each is counted, nothing is mapped
+// from it, and decoding goes on.
+TEST(DeviceFeed, DamagedInputIsCountedAndNothingIsMappedFromIt) {
+  auto feed = DeviceFeed::create(feedConfig()).value();
+  FeedOutput out;
+  auto sentence = [](const std::string& body) {
+    char hh[3];
+    std::snprintf(hh, sizeof hh, "%02X", backseat::xorChecksum(body));
+    return bytesOf("$" + body + "*" + hh + "\r\n");
+  };
+  feed.feed(DeviceId::kBackseat, 1 * kMs,
+            sentence("BFNVG,000000.00,4200.000000,N,07100.000000,W,0,3.00,nan,90.00,0.00,0.00,000000.00"), out);
+  EXPECT_FALSE(out.vehicle_navigation.has_value());  // the decoder drops it as malformed
+  EXPECT_EQ(feed.droppedInput(DeviceId::kBackseat), 1u);
+  std::vector<std::uint8_t> bad = sentence("BFNVG,000000.00,4200.000000,N,07100.000000,W,0,3.00,2.00,90.00,0.00,0.00,000000.00");
+  bad[bad.size() - 3] ^= 0x01;  // checksum digit
+  feed.feed(DeviceId::kBackseat, 2 * kMs, bad, out);
+  EXPECT_FALSE(out.vehicle_navigation.has_value());
+  EXPECT_EQ(feed.droppedInput(DeviceId::kBackseat), 2u);  // one bad frame each
+
+  const auto datagrams = sonar::encodeSonarDatagrams(frameAt(0, 1, 96));
+  std::vector<std::uint8_t> cut = datagrams.value().front();
+  cut.resize(cut.size() / 2);
+  feed.feed(DeviceId::kSonar, 3 * kMs, cut, out);
+  EXPECT_EQ(feed.counters(DeviceId::kSonar).rejected, 1u);
+
+  mock::SimWireConfig wire;
+  std::vector<std::uint8_t> pd0 = dvl::encodePd0(mock::toPd0Ensemble({0, true, Eigen::Vector3d(0.2, 0, 0), 3.0}, 1, wire).value());
+  pd0[20] ^= 0xFF;
+  feed.feed(DeviceId::kDvl, 4 * kMs, pd0, out);
+  EXPECT_EQ(feed.counters(DeviceId::kDvl).messages, 0u);
+  EXPECT_GT(feed.droppedInput(DeviceId::kDvl), 0u);
+  EXPECT_TRUE(out.scans.empty());
+  EXPECT_TRUE(out.odometry.empty());
+
+  // And the good data after it is decoded.
+  const FeedRun run = feedAll(feed, recording());
+  EXPECT_EQ(run.scans.size(), 94u);
 }
 
 TEST(DeviceFeed, BadConfigurationIsNamed) {

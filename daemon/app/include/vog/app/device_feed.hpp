@@ -107,8 +107,8 @@ class DeviceFeed {
   const DeviceCounters& counters(DeviceId device) const;
   // The odometry pose at a stamp (what a scan at that stamp is mapped with), or why there is none.
   Result<geometry::Pose3> odometryPoseAt(std::int64_t stamp_ns) const;
-  // Bytes dropped by a device's stream decoder (garbage, bad checksums, overflow), for health.
-  std::uint64_t droppedBytes(DeviceId device) const;
+  // What a device's decoder dropped, for health: garbage and overflow bytes plus damaged frames.
+  std::uint64_t droppedInput(DeviceId device) const;
   nav::NavSolution deadReckoning(std::int64_t now_ns) const { return dead_reckoning_.solution(now_ns); }
   bool aligned() const { return aligned_; }
   std::uint64_t scans() const { return scans_; }
