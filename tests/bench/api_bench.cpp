@@ -3,6 +3,7 @@
 // to the client's receipt (p50/p99/max; target p99 <= 10 ms). Then a snapshot of a merged
 // map of about one million known voxels fetched from version 0 by one client (target <= 1 s).
 // Server and clients share this process (and its 2 cores); RSS and CPU are the whole process's.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/api/api_server.hpp"
@@ -114,11 +115,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   app.add_option("--rate", rate_hz, "waypoints (and poses) published per second")->check(CLI::Range(1.0, 100000.0));
   app.add_option("--side", side, "the snapshot map is a cube of side^3 voxels")->check(CLI::Range(8, 400));
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
 
   const bench::Stopwatch build_clock;
   auto map = buildCubeMap(side);

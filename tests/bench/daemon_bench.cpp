@@ -4,6 +4,7 @@
 // planner's hand-over (the daemon's wall clock in each waypoint) to each observer's receipt, losses,
 // the time to fetch the whole map at the end, and the daemon's own RSS and CPU (from /proc, sampled
 // every second; 100 % = one core). vogd and the clients share this machine's cores.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "subprocess.hpp"
 
@@ -75,11 +76,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   app.add_option("--submaps", submaps, "submap budget of the mission")->check(CLI::Range(1, 1000));
   app.add_option("--max-s", max_s, "wall-time limit, s")->check(CLI::Range(1.0, 36000.0));
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
     std::cerr << "daemon bench: " << message << "\n";
     return 1;

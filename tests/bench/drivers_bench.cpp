@@ -1,5 +1,6 @@
 // vog-bench drivers: PD0 decode throughput (MB/s) and sonar range extraction (frames/s on 96 x 512
 // frames), single thread, medians over repeats. Targets: >= 100 MB/s and >= 2000 frames/s.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/codec/stream_decoder.hpp"
@@ -67,11 +68,7 @@ VOG_BENCH_COMMAND(drivers, "Device codecs: PD0 decode MB/s, sonar range extracti
   app.add_option("--frames", frames, "sonar frames per repeat")->check(CLI::Range(1, 100000));
   app.add_option("--seed", seed, "data seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   std::mt19937 rng(seed);
 
   // PD0: a stream of distinct ensembles decoded through the stream decoder, as the driver does.

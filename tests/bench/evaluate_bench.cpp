@@ -5,6 +5,7 @@
 // times vogd recorded. Reads only the mission folder (journal, submaps, raw log with the truth records,
 // iterations.csv, merges.csv) and the configuration it ran with; with --out it writes the CSVs that
 // scripts/plot-mission draws (coverage filled in every 10 submaps, with the final poses).
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "reconstruction_eval.hpp"
 
@@ -55,11 +56,7 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   app.add_option("--mission", mission_dir, "the mission folder")->required();
   app.add_option("--out", out_dir, "write iterations.csv, merges.csv, path.csv, map_points.csv for scripts/plot-mission");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
     std::cerr << "evaluate: " << message << "\n";
     return 1;

@@ -2,6 +2,7 @@
 // pseudo-terminal, CAN records over SOCK_SEQPACKET) and dead-reckoning update rate, medians over
 // repeats. No targets; the figures size the daemon's I/O thread budget (a DVL at
 // 115200 baud is 11.5 kB/s, an IMU on CAN 400 frames/s).
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include <sys/socket.h>
@@ -125,11 +126,7 @@ VOG_BENCH_COMMAND(io, "Transports and navigation: serial pty MB/s, CAN seqpacket
   app.add_option("--serial-kb", serial_kb, "kilobytes through the pty per repeat")->check(CLI::PositiveNumber);
   app.add_option("--can-frames", can_frames, "CAN records per repeat")->check(CLI::PositiveNumber);
   app.add_option("--nav-samples", nav_samples, "IMU samples per repeat")->check(CLI::PositiveNumber);
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   std::vector<double> serial, can, nav;
   for (int r = 0; r < repeats; ++r) {
     serial.push_back(serialMBps(static_cast<std::size_t>(serial_kb) * 1024));

@@ -1,5 +1,6 @@
 // vog-bench map: builds a synthetic VogMap (submaps of 100 sonar scans of 96 beams at 0.095 m on an
 // orbit around a pier, ranges up to 5.6 m) and times merging and queries. Prints JSON.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "pier_submaps.hpp"
 #include "synthetic_scene.hpp"
@@ -50,11 +51,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   app.add_option("--seed", opt.seed, "noise seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
   app.add_option("--out", opt.out_dir, "write merged.bt, merged.ot and the VogMap (vogmap/) to this directory");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
 
   const map::GridConfig config;  // resolution 0.095 m
   const bench::Stopwatch build_clock;

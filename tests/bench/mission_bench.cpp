@@ -23,6 +23,7 @@
 // Timing fields (wall_s, realtime_factor, cpu_s, *_ms_*) vary from run to run; all others depend only
 // on the seed.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "reconstruction_eval.hpp"
 
@@ -220,11 +221,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   double max_heading_deg = mc.loop_closer.max_heading_difference_rad * 180.0 / std::numbers::pi;
   app.add_option("--lc-max-heading-deg", max_heading_deg, "loop closures: viewing-direction gate, deg");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
     std::cerr << "mission bench: " << message << "\n";
     return 1;

@@ -3,6 +3,7 @@
 // the time to persist one closed submap (its .ot written atomically + the journal group fsync'ed), the
 // journal and .ot sizes, the time to reopen the mission and restore the pipeline, and the latency of a
 // single waypoint append + fsync. Uses a fresh directory under the system temp dir unless --dir is given.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "../unit/slam/pipeline_fixture.hpp"
@@ -23,11 +24,7 @@ VOG_BENCH_COMMAND(persist, "mission persistence: submap group persist time, jour
   std::string dir_arg;
   app.add_option("--scans", n_scans, "scans of the synthetic orbit (two laps = 760)")->check(CLI::Range(50, 5000));
   app.add_option("--dir", dir_arg, "mission directory to create (must not exist); default: a temp dir, removed");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   namespace fs = std::filesystem;
   const bool temp = dir_arg.empty();
   const fs::path dir = temp ? fs::temp_directory_path() / ("vog-bench-persist-" + std::to_string(::getpid())) : fs::path(dir_arg);

@@ -3,6 +3,7 @@
 // times the traversability grid (full build, incremental update after one more submap) and the
 // sonar gain of one RRT edge, and runs the planner receding-horizon style: plan, move to the first
 // waypoint, merge the next submap, plan again. Prints JSON.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "pier_submaps.hpp"
 #include "synthetic_scene.hpp"
@@ -53,11 +54,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
   app.add_option("--plans", opt.plans, "timed planning iterations")->check(CLI::Range(1, 100000));
   app.add_option("--seed", opt.seed, "noise and planner seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
 
   const map::GridConfig grid_config;
   const bench::Stopwatch build_clock;

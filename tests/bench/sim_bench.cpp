@@ -2,6 +2,7 @@
 // shipped scene, medians over repeats. Target: >= 2000 scans/s, so a 156-submap mission
 // of 15,600 scans simulates in seconds. Also reports scans/s with the 96 x 512 intensity frame.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/sim/sonar_model.hpp"
@@ -26,11 +27,7 @@ VOG_BENCH_COMMAND(sim, "Simulator: sonar scans/s (96 beams x 5 sub-rays, one cor
   app.add_option("--sub-rays", sub_rays, "sub-rays per beam")->check(CLI::Range(1, 64));
   app.add_option("--seed", seed, "noise and pose seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
 
   auto scene = vog::sim::loadScene(scene_file);
   if (!scene) {

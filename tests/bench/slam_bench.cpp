@@ -10,6 +10,7 @@
 // relative pose, within the directions it constrains, is off the ground truth by more than 0.2 m or
 // 2 deg (slam::closureError). Deterministic per seed.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "reconstruction_eval.hpp"
 
@@ -164,11 +165,7 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   slam::MappingPipelineConfig base;  // library defaults; the options below override a few
   app.add_option("--lc-max-fitness", base.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
     std::cerr << "slam bench: " << message << "\n";
     return 1;

@@ -4,6 +4,7 @@
 // $BPGHP commands over the backseat TCP link. Reports per speed-up: worst lateness of a step
 // behind its wall-clock due time, mean wall time of a step that renders and sends a sonar frame,
 // frames sent / completed, and the range agreement. Real time holds while max lag stays small.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include <asio.hpp>
@@ -38,11 +39,7 @@ VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agr
   app.add_option("--sim-seconds", sim_seconds, "simulated seconds per speed-up")->check(CLI::Range(1.0, 3600.0));
   app.add_option("--seed", seed, "simulation seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
-  try {
-    app.parse(std::vector<std::string>(args.rbegin(), args.rend()));
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto scene = vog::sim::loadScene(scene_file);
   if (!scene) {
     std::cerr << "vehicle bench: " << scene.error().message << "\n";
