@@ -48,8 +48,6 @@ Result<std::unique_ptr<SimSource>> SimSource::create(const SimSection& config,
   auto world = sim::World::create(*scene);
   if (!world) return Error{"sim.scene: " + world.error().message};
   std::unique_ptr<SimSource> source(new SimSource(config, std::move(world).value()));
-  source->scene_box_ = scene->bounds_world;
-  source->T_world_start_ = scene->T_world_start;
 
   sim::LockstepConfig sc;
   sc.seed = config.seed;

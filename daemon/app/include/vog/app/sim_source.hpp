@@ -45,9 +45,6 @@ class SimSource final : public VehicleSource {
   Status failure() const override;
   std::optional<SourceObstruction> takeObstruction() override;  // a move the collision check refused
 
-  // The scene's exploration box and start pose (the daemon's defaults for a simulated mission).
-  const Eigen::AlignedBox3d& sceneBox() const { return scene_box_; }
-  const geometry::Pose3& startPose() const { return T_world_start_; }
   // Collisions the simulated vehicle suffered (it stops short of the scene; a planner bug if > 0).
   std::uint64_t collisions() const { return collisions_.load(); }
   double simSeconds() const { return 1e-9 * static_cast<double>(stamp_ns_.load()); }
@@ -62,8 +59,6 @@ class SimSource final : public VehicleSource {
   const SimSection config_;
   std::unique_ptr<sim::World> world_;
   std::unique_ptr<sim::LockstepSimulation> simulation_;  // sim thread only after start()
-  Eigen::AlignedBox3d scene_box_;
-  geometry::Pose3 T_world_start_ = geometry::Pose3::Identity();
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;

@@ -82,8 +82,6 @@ class WaypointFollower {
   bool idle() const { return waypoints_.empty() && !hold_pending_; }
   const FollowerStats& stats() const { return stats_; }
   const std::string& lastError() const { return last_error_; }
-  // The command in force, navigation frame (x, y, z; yaw), if any.
-  std::optional<SourceWaypoint> target() const { return target_; }
   // The obstruction of the last timeout, once.
   std::optional<SourceObstruction> takeObstruction() { return std::exchange(obstruction_, std::nullopt); }
 
