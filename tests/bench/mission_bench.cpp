@@ -211,6 +211,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
   app.add_option("--global-search", global_search, "planner's global search when the local tree finds no gain (1/0)");
   double global_min_gain = plan::PlannerConfig{}.global_min_gain;
+  double clearance_m = plan::PlannerConfig{}.clearance_m;
+  app.add_option("--clearance", clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--global-min-gain", global_min_gain, "planner: gain a global-search view needs to become a goal");
   app.add_option("--obstruction-feedback", obstruction_feedback,
                  "report a refused move to the planner, which blocks the space ahead (1/0)");
@@ -295,6 +297,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   pc.fan = fan;
   pc.global_search = global_search;
   pc.global_min_gain = global_min_gain;
+  pc.clearance_m = clearance_m;
   if (mode == Mode::kBaseline) {
     pc.constrained_sampling = false;
     pc.gain_along_edge = false;

@@ -92,6 +92,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
 
 void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
   m.vector3("collision_box_m", c.collision_box_m, 0.01, 20.0);
+  m.number("clearance_m", c.clearance_m, 0.0, 5.0);
   m.number("planner_range_m", c.planner_range_m, 0.1, 100.0);
   m.number("lambda", c.lambda, 0.0, 100.0);
   m.number("max_edge_m", c.max_edge_m, 0.05, 100.0);

@@ -71,7 +71,7 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
     if (grid_->update(map).ok()) return {};
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
-  auto built = TraversabilityGrid::build(map, box, anyHeadingBox(config_.collision_box_m),
+  auto built = TraversabilityGrid::build(map, box, anyHeadingBox(config_.collision_box_m, config_.clearance_m),
                                         {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
@@ -102,9 +102,9 @@ void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& 
   tree_.push_back(n);
 }
 
-Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m) {
+Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m, double clearance_m) {
   const double side_xy = collision_box_m.head<2>().norm();
-  return {side_xy, side_xy, collision_box_m.z()};
+  return {side_xy + 2.0 * clearance_m, side_xy + 2.0 * clearance_m, collision_box_m.z()};
 }
 
 Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {

@@ -39,6 +39,7 @@ Status PlannerConfig::validate() const {
   }
   if (!collision_box_m.allFinite() || (collision_box_m.array() <= 0.0).any())
     return Error{badVector("collision_box_m", collision_box_m, "> 0 on every axis")};
+  if (!nonNegativeFinite(clearance_m) || clearance_m > 5.0) return Error{bad("clearance_m", clearance_m, "[0, 5]")};
   if (!positiveFinite(planner_range_m)) return Error{bad("planner_range_m", planner_range_m, "> 0")};
   if (!nonNegativeFinite(lambda)) return Error{bad("lambda", lambda, ">= 0")};
   if (!nonNegativeFinite(root_tolerance_m)) return Error{bad("root_tolerance_m", root_tolerance_m, ">= 0")};

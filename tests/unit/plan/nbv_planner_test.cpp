@@ -186,6 +186,9 @@ TEST_F(PlannerMaps, ErrorsNameTheBadInput) {
   c.collision_box_m.y() = 0.0;
   expectError(c, start, "plan.collision_box_m");
   c = roomConfig();
+  c.clearance_m = -0.1;
+  expectError(c, start, "plan.clearance_m");
+  c = roomConfig();
   c.max_heading_change_rad = 4.0;
   expectError(c, start, "plan.max_heading_change_rad");
   c = roomConfig();
@@ -476,6 +479,39 @@ TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDroppe
   // Turning on the spot gives no direction; non-finite input is refused.
   EXPECT_FALSE(planner->reportObstruction(stopped, stopped).has_value());
   EXPECT_FALSE(planner->reportObstruction(Eigen::Vector3d(NAN, 0, 0), target).has_value());
+}
+
+// The clearance widens the checked box's vertical sides only (depth does not drift): a 1.8 m door
+// lets the any-heading box (1.41 m) through without it and not with 0.2 m of clearance, and the
+// vertical margin stays.
+TEST(TraversabilityGrid, ClearanceNarrowsDoorsButNotTheVerticalMargin) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.2, 3.0, -0.5));
+  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.2, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
+  const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 0.0, -3.0), Eigen::Vector3d(0.3, 1.8, -0.5));
+  auto notInDoor = [&](const map::VoxelKey& k) {
+    const Eigen::Vector3d c = map::keyToCentre(k, res);
+    return !(std::abs(c.x()) < 0.3 && c.y() > 0.0 && c.y() < 1.8);
+  };
+  auto none = [](const map::VoxelKey&) { return false; };
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, notInDoor),
+                                              test_fixtures::carvedGrid(config, east, notInDoor),
+                                              test_fixtures::carvedGrid(config, door, none)});
+  const Eigen::Vector3d box(1.0, 1.0, 0.5);
+  EXPECT_TRUE(anyHeadingBox(box, 0.2).isApprox(Eigen::Vector3d(std::sqrt(2.0) + 0.4, std::sqrt(2.0) + 0.4, 0.5)));
+  const auto tight = TraversabilityGrid::build(*map, kRoom, anyHeadingBox(box)).value();
+  const auto clear = TraversabilityGrid::build(*map, kRoom, anyHeadingBox(box, 0.2)).value();
+  EXPECT_EQ(clear.inflationVoxels().z(), tight.inflationVoxels().z());
+  EXPECT_EQ(clear.inflationVoxels().x(), tight.inflationVoxels().x() + 2);
+  const Eigen::Vector3d from(-3.0, 0.9, -1.75), to(3.0, 0.9, -1.75);
+  const auto through = tight.findPath(from, to);
+  ASSERT_TRUE(through.ok()) << through.error().message;
+  for (std::size_t i = 1; i < through->size(); ++i)
+    EXPECT_TRUE(bruteForceEdgeFree(*map, (*through)[i - 1], (*through)[i], anyHeadingBox(box)));
+  EXPECT_TRUE(clear.isSafe(from));
+  EXPECT_TRUE(clear.isSafe(to));
+  EXPECT_FALSE(clear.findPath(from, to).ok());
 }
 
 TEST(TraversabilityGrid, ReachableIsTheConnectedSafeRegionInBreadthFirstOrder) {

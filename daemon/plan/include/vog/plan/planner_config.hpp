@@ -25,6 +25,11 @@ struct PlannerConfig {
   Eigen::Vector3d box_max_world_m{6.0, 3.5, 0.0};
   // Full side lengths of the vehicle's collision box, centred on the vehicle (Table 4.2).
   Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};
+  // Horizontal clearance kept between the collision box and anything not known free: the map around
+  // the vehicle is drawn at an estimate that drifts in x, y and heading between loop closures, so a
+  // box that only just fits in the map's free space can touch the real surface. None in z: depth is
+  // measured, it does not drift (our choice; vog-bench mission).
+  double clearance_m = 0.0;
   double planner_range_m = 5.0;           // d_max^planner (Table 4.2)
   double lambda = 0.5;                    // gain discount per metre of path cost (Table 4.2)
   double max_edge_m = 2.0;                // RRT max edge length (Table 4.2)
