@@ -223,26 +223,42 @@ TEST(BenchMission, VogdOnMockDevicesMapsSurvivesFaultsAndResumesAfterKill9) {
   EXPECT_GE(std::stoi(m[1]), 5) << vehicle;
   EXPECT_EQ(m[1], m[2]) << "the vehicle refused waypoints: " << vehicle;
 
-  // The products, through the API.
-  const Vogctl snapshot = b.vogctl({"snapshot", "--out", (b.dir() / "map.bt").string()});
-  ASSERT_EQ(snapshot.status, 0) << snapshot.out;
+  // The products, through the API: a snapshot and the cloud of the same map version (the map
+  // changes with every closed submap and closure, so the pair is fetched until a snapshot before
+  // and one after the cloud have the same version). The cloud is exactly the snapshot's occupied
+  // voxels.
   octomap::OcTree tree(0.1);
+  std::vector<Eigen::Vector3f> points;
+  bool same_version = false;
+  for (int attempt = 0; attempt < 20 && !same_version; ++attempt) {
+    const Vogctl before = b.vogctl({"snapshot", "--out", (b.dir() / "map.bt").string(), "--json"});
+    ASSERT_EQ(before.status, 0) << before.out;
+    const Vogctl cloud = b.vogctl({"cloud", "--out", (b.dir() / "cloud.ply").string(), "--json"});
+    ASSERT_EQ(cloud.status, 0) << cloud.out;
+    const Vogctl after = b.vogctl({"snapshot", "--out", (b.dir() / "map-after.bt").string(), "--json"});
+    ASSERT_EQ(after.status, 0) << after.out;
+    std::smatch v0, v1;
+    ASSERT_TRUE(std::regex_search(before.out, v0, std::regex("\"map_version\":([0-9]+)"))) << before.out;
+    ASSERT_TRUE(std::regex_search(after.out, v1, std::regex("\"map_version\":([0-9]+)"))) << after.out;
+    same_version = v0[1] == v1[1];
+    ASSERT_TRUE(std::regex_search(cloud.out, m, std::regex("\"points\":([0-9]+)"))) << cloud.out;
+    points = readBinaryPly(b.dir() / "cloud.ply");
+    ASSERT_EQ(points.size(), std::stoul(m[1]));
+  }
+  ASSERT_TRUE(same_version) << "the map changed during every snapshot-cloud-snapshot sequence";
   ASSERT_TRUE(tree.readBinary((b.dir() / "map.bt").string()));
   EXPECT_GT(tree.getNumLeafNodes(), 10000u);
-  const Vogctl cloud = b.vogctl({"cloud", "--out", (b.dir() / "cloud.ply").string(), "--json"});
-  ASSERT_EQ(cloud.status, 0) << cloud.out;
-  ASSERT_TRUE(std::regex_search(cloud.out, m, std::regex("\"points\":([0-9]+)"))) << cloud.out;
-  const std::vector<Eigen::Vector3f> points = readBinaryPly(b.dir() / "cloud.ply");
-  EXPECT_EQ(points.size(), std::stoul(m[1]));
   EXPECT_GT(points.size(), 200u);
-  // The cloud is the map's occupied voxels: nearly all of them are occupied in the snapshot taken a
-  // moment earlier (the map may have grown or been re-merged in between).
+  std::size_t occupied_voxels = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    if (tree.isNodeOccupied(*it)) occupied_voxels += std::size_t{1} << (3 * (tree.getTreeDepth() - it.getDepth()));
   std::size_t in_snapshot = 0;
   for (const Eigen::Vector3f& p : points) {
     const octomap::OcTreeNode* node = tree.search(p.x(), p.y(), p.z());
     if (node != nullptr && tree.isNodeOccupied(node)) ++in_snapshot;
   }
-  EXPECT_GE(in_snapshot, points.size() * 8 / 10) << in_snapshot << " of " << points.size();
+  EXPECT_EQ(in_snapshot, points.size());
+  EXPECT_EQ(occupied_voxels, points.size());
 
   // Faults: garbage on the DVL line, then the IMU unplugged for 3 s (simulated). vogd keeps running,
   // counts the damage, reconnects, and mapping goes on.
