@@ -485,19 +485,10 @@ TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDroppe
 // lets the any-heading box (1.41 m) through without it and not with 0.2 m of clearance, and the
 // vertical margin stays.
 TEST(TraversabilityGrid, ClearanceNarrowsDoorsButNotTheVerticalMargin) {
-  const map::GridConfig config;
-  const double res = config.resolution_m;
   const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.2, 3.0, -0.5));
   const Eigen::AlignedBox3d east(Eigen::Vector3d(0.2, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
   const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 0.0, -3.0), Eigen::Vector3d(0.3, 1.8, -0.5));
-  auto notInDoor = [&](const map::VoxelKey& k) {
-    const Eigen::Vector3d c = map::keyToCentre(k, res);
-    return !(std::abs(c.x()) < 0.3 && c.y() > 0.0 && c.y() < 1.8);
-  };
-  auto none = [](const map::VoxelKey&) { return false; };
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, notInDoor),
-                                              test_fixtures::carvedGrid(config, east, notInDoor),
-                                              test_fixtures::carvedGrid(config, door, none)});
+  auto map = test_fixtures::roomsWithADoor(map::GridConfig{}, west, east, door);
   const Eigen::Vector3d box(1.0, 1.0, 0.5);
   EXPECT_TRUE(anyHeadingBox(box, 0.2).isApprox(Eigen::Vector3d(std::sqrt(2.0) + 0.4, std::sqrt(2.0) + 0.4, 0.5)));
   const auto tight = TraversabilityGrid::build(*map, kRoom, anyHeadingBox(box)).value();

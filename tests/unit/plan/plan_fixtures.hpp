@@ -67,6 +67,21 @@ inline std::unique_ptr<map::MergedMap> mergedOf(const map::GridConfig& config,
   return merged;
 }
 
+// Two carved rooms and the door between them (a carved box across the wall): the rooms' walls leave
+// out the voxels whose centres are strictly inside the door's x-y extent (a wall voxel seen free
+// once and hit once stays occupied).
+inline std::unique_ptr<map::MergedMap> roomsWithADoor(const map::GridConfig& config, const Eigen::AlignedBox3d& west,
+                                                      const Eigen::AlignedBox3d& east, const Eigen::AlignedBox3d& door) {
+  auto notInDoor = [&](const VoxelKey& k) {
+    const Eigen::Vector3d c = map::keyToCentre(k, config.resolution_m);
+    return !((c.head<2>().array() > door.min().head<2>().array()).all() &&
+             (c.head<2>().array() < door.max().head<2>().array()).all());
+  };
+  auto none = [](const VoxelKey&) { return false; };
+  return mergedOf(config, {carvedGrid(config, west, notInDoor), carvedGrid(config, east, notInDoor),
+                           carvedGrid(config, door, none)});
+}
+
 // Sonar submaps of the synthetic pier: scans along an orbit (radius 5.5 m, depth 2 m), split into
 // submaps of `scans_per_submap`, each at its first scan's true pose.
 inline std::vector<map::SubmapEntry> pierSubmaps(const map::GridConfig& config, int n_submaps, int scans_per_submap,

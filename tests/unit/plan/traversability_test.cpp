@@ -174,21 +174,11 @@ TEST(Traversability, CarvedRoomMarginsAndPathHome) {
 }
 
 TEST(Traversability, PathAroundAWallThroughADoor) {
-  const map::GridConfig config;
-  const double res = config.resolution_m;
   // Two rooms joined by a 1.5 m wide door in a wall at x = 0: the path must go through the door.
   const Eigen::AlignedBox3d west(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(-0.2, 3.0, -0.8));
   const Eigen::AlignedBox3d east(Eigen::Vector3d(0.2, -3.0, -2.0), Eigen::Vector3d(4.0, 3.0, -0.8));
   const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 1.0, -2.0), Eigen::Vector3d(0.3, 2.5, -0.8));
-  // The rooms' walls leave the door opening out (a wall voxel seen free once and hit once stays occupied).
-  auto notInDoor = [&](const map::VoxelKey& k) {
-    const Eigen::Vector3d c = map::keyToCentre(k, res);
-    return !(std::abs(c.x()) < 0.3 && c.y() > 1.0 && c.y() < 2.5);
-  };
-  auto none = [](const map::VoxelKey&) { return false; };
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, notInDoor),
-                                              test_fixtures::carvedGrid(config, east, notInDoor),
-                                              test_fixtures::carvedGrid(config, door, none)});
+  auto map = test_fixtures::roomsWithADoor(map::GridConfig{}, west, east, door);
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(4.0, 3.0, -0.8));
   const auto grid = TraversabilityGrid::build(*map, box, kCollisionBox).value();
   const Eigen::Vector3d from(-3.0, -2.0, -1.4);
