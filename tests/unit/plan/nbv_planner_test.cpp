@@ -92,10 +92,12 @@ TEST_F(PlannerMaps, HalfExploredRoomExploresTowardTheUnknownHalf) {
     EXPECT_TRUE(bruteForceEdgeFree(*map, start.p_world, next.p_world, planner->config().collision_box_m));
     EXPECT_LE(std::abs(geometry::wrapAngle(next.yaw_rad - start.yaw_rad)), kPi / 2 + 1e-9);
     // Toward the unknown (east) half: the first step moves east or turns the sonar toward the east,
-    // and the branch ends with the sonar looking at unknown space.
+    // and the branch's last edge sweeps the sonar over unknown space (the best node is the first of
+    // the highest value, so its own edge has gain).
     EXPECT_TRUE(next.p_world.x() > start.p_world.x() || std::cos(next.yaw_rad) > std::cos(start.yaw_rad) + 0.1)
         << next.p_world.transpose() << " yaw " << next.yaw_rad;
-    EXPECT_GT(probe.segmentGain(*map, r.best_branch.back(), r.best_branch.back()), 0.0);
+    ASSERT_GE(r.best_branch.size(), 2u);
+    EXPECT_GT(probe.segmentGain(*map, r.best_branch[r.best_branch.size() - 2], r.best_branch.back()), 0.0);
     EXPECT_GT(r.best_value, planner->config().gain_threshold);
     EXPECT_LE(r.tree_size, planner->config().n_tol + 1);
     expectTreeValid(*planner, *map);
@@ -241,11 +243,11 @@ TEST(NbvPlanner, BoxedInIsNoPathNotAHang) {
     EXPECT_EQ(r.status, PlanStatus::kNoPath);
     EXPECT_NE(r.reason.find("collision box"), std::string::npos) << r.reason;
   }
-  // (b) A pocket 17 x 17 x 7 voxels walled in by occupied voxels: the box at any heading (1.41 m
-  // in x and y) fits in exactly one voxel, so no edge does.
+  // (b) A pocket 19 x 19 x 7 voxels walled in by occupied voxels: the box at any heading with its
+  // clearance (1.61 m in x and y) fits in exactly one voxel, so no edge does.
   {
-    const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-8, -8, -21), res);
-    const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(8, 8, -15), res);
+    const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-9, -9, -21), res);
+    const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(9, 9, -15), res);
     auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), all)});
     auto planner = NbvPlanner::create(c, {centre, 0.0}).value();
     ASSERT_TRUE(planner->plan(map->snapshot(), {centre, 0.0}).ok());
@@ -351,7 +353,8 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   // The planner's incrementally updated grid equals one built from the final snapshot.
   const auto final_snap = newest();
   ASSERT_TRUE(planner->plan(final_snap, current).ok());
-  const auto scratch = TraversabilityGrid::build(*final_snap, box, anyHeadingBox(c.collision_box_m)).value();
+  const auto scratch =
+      TraversabilityGrid::build(*final_snap, box, anyHeadingBox(c.collision_box_m, c.clearance_m)).value();
   EXPECT_TRUE(planner->traversability()->sameFlags(scratch));
 }
 

@@ -28,8 +28,9 @@ struct PlannerConfig {
   // Horizontal clearance kept between the collision box and anything not known free: the map around
   // the vehicle is drawn at an estimate that drifts in x, y and heading between loop closures, so a
   // box that only just fits in the map's free space can touch the real surface. None in z: depth is
-  // measured, it does not drift (our choice; vog-bench mission).
-  double clearance_m = 0.0;
+  // measured, it does not drift (our choice: one voxel; vog-bench mission: no refused move in 10
+  // runs, against 13 without it).
+  double clearance_m = 0.1;
   double planner_range_m = 5.0;           // d_max^planner (Table 4.2)
   double lambda = 0.5;                    // gain discount per metre of path cost (Table 4.2)
   double max_edge_m = 2.0;                // RRT max edge length (Table 4.2)
@@ -54,8 +55,8 @@ struct PlannerConfig {
   // The tree grows from the nearest safe position within this distance of the vehicle's estimate
   // when the estimate itself is not safe: the vehicle stops within its navigation and control error
   // of a safe waypoint, and a loop closure can move the estimate (not the vehicle) by tens of
-  // centimetres (our choice: half the collision box's side; vog-bench mission).
-  double root_tolerance_m = 0.5;
+  // centimetres (our choice: half the collision box's side plus the clearance; vog-bench mission).
+  double root_tolerance_m = 0.6;
   // After an obstruction (NbvPlanner::reportObstruction) the vehicle first backs off this far the way
   // it came: three voxels, more than the any-heading box's one-voxel margin.
   double obstruction_retreat_m = 0.3;
