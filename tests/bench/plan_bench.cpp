@@ -73,6 +73,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
   for (int s = 0; s < opt.submaps - held; ++s) (void)writer->add(entries[static_cast<std::size_t>(s)]);
 
   // Traversability: full build, then incremental update after one more submap (vs rebuild).
+  const Eigen::Vector3d checked_box = plan::anyHeadingBox(config.collision_box_m, config.clearance_m);
   std::vector<double> build_ms;
   std::vector<double> update_ms;
   std::vector<double> rebuild_ms;
@@ -83,7 +84,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
     for (int rep = 0; rep < 5; ++rep) {
       const auto before = probe->snapshot();
       const bench::Stopwatch sw;
-      auto grid = plan::TraversabilityGrid::build(*before, box, plan::anyHeadingBox(config.collision_box_m)).value();
+      auto grid = plan::TraversabilityGrid::build(*before, box, checked_box).value();
       build_ms.push_back(sw.seconds() * 1e3);
       (void)probe->add(entries[static_cast<std::size_t>(opt.submaps - held + rep)]);
       const auto after = probe->snapshot();
@@ -92,7 +93,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
       update_ms.push_back(su.seconds() * 1e3);
       recomputed_blocks.push_back(stats.blocks_recomputed);
       const bench::Stopwatch sr;
-      const auto scratch = plan::TraversabilityGrid::build(*after, box, plan::anyHeadingBox(config.collision_box_m)).value();
+      const auto scratch = plan::TraversabilityGrid::build(*after, box, checked_box).value();
       rebuild_ms.push_back(sr.seconds() * 1e3);
       if (!grid.sameFlags(scratch)) {
         std::fprintf(stderr, "vog-bench plan: incremental traversability differs from a rebuild\n");
@@ -103,7 +104,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
 
   // Start: the first point a few metres inside the orbit where the collision box is in known free space.
   const auto first = writer->snapshot();
-  const auto grid0 = plan::TraversabilityGrid::build(*first, box, plan::anyHeadingBox(config.collision_box_m)).value();
+  const auto grid0 = plan::TraversabilityGrid::build(*first, box, checked_box).value();
   plan::Waypoint start;
   bool found = false;
   for (int k = 0; k < 720 && !found; ++k) {
