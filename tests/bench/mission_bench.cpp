@@ -217,7 +217,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--clearance", clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--global-min-gain", global_min_gain, "planner: gain a global-search view needs to become a goal");
   app.add_option("--obstruction-feedback", obstruction_feedback,
-                 "report a refused move to the planner, which blocks the space ahead (1/0)");
+                 "report a refused move to the planner, which backs the vehicle off the way it came (1/0)");
   app.add_option("--root-first", root_first,
                  "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
                  "the fix, to reproduce the collisions it caused");
@@ -448,7 +448,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       collision_rows.push_back(c);
       ++collisions;  // the planner sent the vehicle into the scene; it was stopped short
       // The vehicle reports where it was stopped and where it was going (its estimate, as the
-      // daemon does); the planner blocks the space ahead of it.
+      // daemon does); the next plan backs the vehicle off the way it came.
       if (const auto next = simulation.vehicle().nextWaypoint(); next && obstruction_feedback) {
         const Pose3 T_map_true = estimatedPose() * c.T_true.inverse();
         planner.reportObstruction(c.T_estimated.translation(), T_map_true * next->xyz_world);
