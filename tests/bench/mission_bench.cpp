@@ -198,10 +198,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   int coverage_every = 10;
   std::string out_dir;
   bool json = false;
-  bool global_search = true;
   bool root_first = true;
   bool obstruction_feedback = true;
   slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
+  plan::PlannerConfig pc;          // the same
   CLI::App app{"vog-bench mission"};
   app.add_option("--scene", scene_file, "scene YAML file");
   app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
@@ -211,11 +211,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--coverage-every", coverage_every, "compute coverage every n planning iterations")
       ->check(CLI::Range(1, 100000));
   app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
-  app.add_option("--global-search", global_search, "planner's global search when the local tree finds no gain (1/0)");
-  double global_min_gain = plan::PlannerConfig{}.global_min_gain;
-  double clearance_m = plan::PlannerConfig{}.clearance_m;
-  app.add_option("--clearance", clearance_m, "planner: clearance between the collision box and non-free space, m");
-  app.add_option("--global-min-gain", global_min_gain, "planner: gain a global-search view needs to become a goal");
+  app.add_option("--global-search", pc.global_search, "planner's global search when the local tree finds no gain (1/0)");
+  app.add_option("--global-min-gain", pc.global_min_gain, "planner: gain a global-search view needs to become a goal");
+  app.add_option("--clearance", pc.clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--obstruction-feedback", obstruction_feedback,
                  "report a refused move to the planner, which backs the vehicle off the way it came (1/0)");
   app.add_option("--root-first", root_first,
@@ -292,14 +290,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (!truth_r) return fail(truth_r.error().message);
   map::LocalGrid& truth_grid = **truth_r;
 
-  plan::PlannerConfig pc;
   pc.box_min_world_m = scene->bounds_world.min();
   pc.box_max_world_m = scene->bounds_world.max();
   pc.seed = seed;
   pc.fan = fan;
-  pc.global_search = global_search;
-  pc.global_min_gain = global_min_gain;
-  pc.clearance_m = clearance_m;
   if (mode == Mode::kBaseline) {
     pc.constrained_sampling = false;
     pc.gain_along_edge = false;
