@@ -50,6 +50,7 @@ Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3
   icp.degeneracy_aware = false;
   icp.max_iterations = 50;
   icp.max_correspondence_distance_m = 1.0;
+  icp.min_correspondence_distance_m = 1.0;  // a fixed bound: the error figures stay comparable across changes
   auto aligned = slam::icpPointToPlane(source, reference.cloud(), geometry::Pose3::Identity(), icp);
   if (!aligned) return Error{"reconstruction error: alignment: " + aligned.error().message};
   ReconstructionError out;

@@ -77,9 +77,11 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("max_correspondence_distance_m", corr, 0.01, 10.0);
   lc.point_to_plane.max_correspondence_distance_m = corr;
   lc.p2p.max_correspondence_distance_m = corr;
+  l.number("min_correspondence_distance_m", lc.point_to_plane.min_correspondence_distance_m, 0.01, 10.0);
   l.degrees("max_heading_difference_deg", lc.max_heading_difference_rad, 1.0, 180.0);
   l.degrees("max_yaw_disagreement_deg", lc.max_yaw_disagreement_rad, 0.1, 180.0);
   l.number("min_overlap_fraction", lc.min_overlap_fraction, 0.0, 1.0);
+  l.number("p2p_min_overlap_fraction", lc.p2p_min_overlap_fraction, 0.0, 1.0);
   l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);
   l.number("odometry_cov_y_m2_per_s", lc.acceptance.odometry_cov_y_m2_per_s, 1e-9, 10.0);
   l.number("robust_loss_scale", c.graph.loop_closure_loss_scale, 1e-3, 1e3);
@@ -107,6 +109,7 @@ void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
   m.boolean("gain_along_edge", c.gain_along_edge);
   m.number("assume_free_radius_m", c.assume_free_radius_m, 0.0, 100.0);
   m.number("root_tolerance_m", c.root_tolerance_m, 0.0, 10.0);
+  m.number("recovery_radius_m", c.recovery_radius_m, 0.0, 10.0);
   m.number("obstruction_retreat_m", c.obstruction_retreat_m, 0.0, 5.0);
   m.number("gain_unknown", c.gain_unknown, 0.0, 1e6);
   m.number("gain_free", c.gain_free, 0.0, 1e6);

@@ -145,10 +145,25 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   if (!grid_->isSafe(current.p_world)) {
     const auto snapped = grid_->nearestSafe(current.p_world, config_.root_tolerance_m);
     if (!snapped) {
-      result.status = PlanStatus::kNoPath;
       result.tree_size = 1;
+      // Farther from the safe voxels than the vehicle can have strayed: a loop closure moved the map
+      // around it, typically nearer a surface than the estimate had it. It is physically where it was a
+      // moment ago, so it moves straight (keeping its heading) to the nearest safe voxel that its box
+      // reaches without touching an occupied voxel.
+      if (const auto escape = grid_->nearestSafeClearOfOccupied(current.p_world, current.yaw_rad,
+                                                               config_.collision_box_m, config_.recovery_radius_m)) {
+        result.status = PlanStatus::kExplore;
+        result.waypoints = {Waypoint{*escape, current.yaw_rad}};
+        result.best_branch = {current, result.waypoints.front()};
+        result.reason = "recovering: the current position " + describe(current.p_world) +
+                        " is not in the safe region; moving to " + describe(*escape);
+        tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
+        return result;
+      }
+      result.status = PlanStatus::kNoPath;
       result.reason = "the collision box at the current position " + describe(current.p_world) +
-                      " is not entirely in known free space (nor within plan.root_tolerance_m)";
+                      " is not entirely in known free space (nor within plan.root_tolerance_m, and no safe voxel"
+                      " within plan.recovery_radius_m is reachable clear of occupied space)";
       return result;
     }
     start.p_world = *snapped;

@@ -43,6 +43,7 @@ Status PlannerConfig::validate() const {
   if (!positiveFinite(planner_range_m)) return Error{bad("planner_range_m", planner_range_m, "> 0")};
   if (!nonNegativeFinite(lambda)) return Error{bad("lambda", lambda, ">= 0")};
   if (!nonNegativeFinite(root_tolerance_m)) return Error{bad("root_tolerance_m", root_tolerance_m, ">= 0")};
+  if (!nonNegativeFinite(recovery_radius_m)) return Error{bad("recovery_radius_m", recovery_radius_m, ">= 0")};
   if (!nonNegativeFinite(assume_free_radius_m)) return Error{bad("assume_free_radius_m", assume_free_radius_m, ">= 0")};
   if (!positiveFinite(max_edge_m)) return Error{bad("max_edge_m", max_edge_m, "> 0")};
   if (n_max < 1 || n_max > 100000) return Error{bad("n_max", n_max, "[1, 100000]")};

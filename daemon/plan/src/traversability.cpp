@@ -1,10 +1,14 @@
 #include "vog/plan/traversability.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <queue>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace vog::plan {
 
@@ -282,6 +286,68 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafe(const Eigen::Vect
         }
       }
   return best;
+}
+
+std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(const Eigen::Vector3d& p_world,
+                                                                              double yaw_rad,
+                                                                              const Eigen::Vector3d& box_m,
+                                                                              double radius_m) const {
+  if (!p_world.allFinite() || !std::isfinite(yaw_rad) || !box_m.allFinite() || !(radius_m >= 0.0)) return std::nullopt;
+  // Box frame: axes u_i = R e_i. A voxel (a cube of side res) can touch the box only if its centre q
+  // satisfies |u_i . (q - s)| <= h_i + res/2 (|u_i,x| + |u_i,y| + |u_i,z|) on every axis for some
+  // centre s on the segment (separating axes of the box only: conservative).
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Vector3d h;
+  for (int i = 0; i < 3; ++i) h[i] = 0.5 * box_m[i] + 0.5 * resolution_ * R.col(i).cwiseAbs().sum();
+  // Occupied voxels that any candidate sweep could touch: within radius + the box's half-diagonal.
+  const double reach_m = radius_m + h.norm();
+  const int reach = static_cast<int>(std::ceil(reach_m * inv_resolution_));
+  const VoxelKey centre = map::pointToKey(p_world, inv_resolution_);
+  std::vector<Eigen::Vector3d> occupied_box;  // q - p in the box frame
+  std::vector<std::pair<double, VoxelKey>> candidates;
+  const int cand_reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
+  VoxelKey d;
+  for (d.z() = -reach; d.z() <= reach; ++d.z())
+    for (d.y() = -reach; d.y() <= reach; ++d.y())
+      for (d.x() = -reach; d.x() <= reach; ++d.x()) {
+        const VoxelKey k = centre + d;
+        const Eigen::Vector3d c = map::keyToCentre(k, resolution_);
+        if (status(k) == map::Occupancy::kOccupied) {
+          // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle
+          // (it is physically there): they cannot be avoided and do not count.
+          const Eigen::Vector3d q = R.transpose() * (c - p_world);
+          if (!(q.array().abs() <= h.array()).all()) occupied_box.push_back(q);
+        }
+        if ((d.array().abs() <= cand_reach).all() && (c - p_world).norm() <= radius_m && insideBox(c) && isSafeKey(k))
+          candidates.emplace_back((c - p_world).norm(), k);
+      }
+  // Nearest first; the loops above visit keys in (z, y, x) order and stable_sort keeps it for ties.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [dist, k] : candidates) {
+    const Eigen::Vector3d move = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);
+    bool touches = false;
+    for (const Eigen::Vector3d& q : occupied_box) {
+      // Does some t in [0, 1] give |q_i - t move_i| <= h_i on every axis?
+      double lo = 0.0, hi = 1.0;
+      for (int i = 0; i < 3 && lo <= hi; ++i) {
+        if (move[i] == 0.0) {
+          if (std::abs(q[i]) > h[i]) hi = -1.0;
+          continue;
+        }
+        double t0 = (q[i] - h[i]) / move[i], t1 = (q[i] + h[i]) / move[i];
+        if (t0 > t1) std::swap(t0, t1);
+        lo = std::max(lo, t0);
+        hi = std::min(hi, t1);
+      }
+      if (lo <= hi) {
+        touches = true;
+        break;
+      }
+    }
+    if (!touches) return map::keyToCentre(k, resolution_);
+  }
+  return std::nullopt;
 }
 
 bool TraversabilityGrid::isSafeKey(const VoxelKey& key) const {

@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -62,11 +63,14 @@ struct Linearisation {
   Eigen::VectorXd Atb;  // m, with b = -r
   std::size_t n = 0;
   double sum_sq_distance = 0.0;
+  // Of those, the correspondences within the inlier bound.
+  std::size_t n_inliers = 0;
+  double sum_sq_inliers = 0.0;
 };
 
 Linearisation linearisePointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
                                     const NearestNeighbours& nn, const Vector6d& x, const std::vector<int>& comps,
-                                    double max_dist_m) {
+                                    double max_dist_m, double inlier_dist_m = 0.0) {
   const geometry::Pose3 T = fromXyzRpy(x);
   const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
   const auto m = static_cast<Eigen::Index>(comps.size());
@@ -90,6 +94,10 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
     lin.Atb.noalias() -= J.transpose() * r;
     lin.sum_sq_distance += dist_sq;
     ++lin.n;
+    if (dist_sq <= inlier_dist_m * inlier_dist_m) {
+      lin.sum_sq_inliers += dist_sq;
+      ++lin.n_inliers;
+    }
   }
   return lin;
 }
@@ -146,6 +154,11 @@ Status PointToPlaneConfig::validate() const {
   if (max_iterations < 1) os << "max_iterations must be >= 1, got " << max_iterations;
   else if (!(max_correspondence_distance_m > 0.0) || !std::isfinite(max_correspondence_distance_m))
     os << "max_correspondence_distance_m must be finite and > 0, got " << max_correspondence_distance_m;
+  else if (!(min_correspondence_distance_m > 0.0) || !(min_correspondence_distance_m <= max_correspondence_distance_m))
+    os << "min_correspondence_distance_m must be in (0, max_correspondence_distance_m = "
+       << max_correspondence_distance_m << "], got " << min_correspondence_distance_m;
+  else if (!(correspondence_shrink > 0.0 && correspondence_shrink <= 1.0))
+    os << "correspondence_shrink must be in (0, 1], got " << correspondence_shrink;
   else if (!(convergence_epsilon > 0.0)) os << "convergence_epsilon must be > 0, got " << convergence_epsilon;
   else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m)) os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
   else if (!(max_direction_stddev > 0.0) || !std::isfinite(max_direction_stddev))
@@ -269,13 +282,16 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
                            (config.sigma_point_m / config.max_direction_stddev);
   Vector6d x = toXyzRpy(T_target_source_init);
   IcpResult out;
+  double max_distance_m = config.max_correspondence_distance_m;
   for (int it = 1; it <= config.max_iterations; ++it) {
     out.iterations = it;
-    const Linearisation lin =
-        linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m);
+    if (it > 1) {
+      max_distance_m = std::max(config.min_correspondence_distance_m, max_distance_m * config.correspondence_shrink);
+    }
+    const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, max_distance_m);
     if (lin.n < config.min_correspondences) {
       std::ostringstream os;
-      os << "icp: only " << lin.n << " correspondences within " << config.max_correspondence_distance_m
+      os << "icp: only " << lin.n << " correspondences within " << max_distance_m
          << " m at iteration " << it << ", need " << config.min_correspondences;
       return Error{os.str()};
     }
@@ -295,17 +311,21 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     for (std::size_t c = 0; c < comps.size(); ++c) x(comps[c]) += step(static_cast<Eigen::Index>(c));
     for (int k = kRoll; k <= kYaw; ++k) x(k) = geometry::wrapAngle(x(k));
     if (!x.allFinite()) return Error{"icp: estimate became non-finite"};
-    if (step.norm() < config.convergence_epsilon) {
+    if (step.norm() < config.convergence_epsilon && max_distance_m <= config.min_correspondence_distance_m) {
       out.converged = true;
       break;
     }
   }
   out.T_target_source = fromXyzRpy(x);
-  // Thesis Alg. 8 step 4: linearise again at the result for V_u and the information.
-  const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m);
-  if (lin.n < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
-  out.n_correspondences = lin.n;
-  out.fitness_m2 = lin.sum_sq_distance / static_cast<double>(lin.n);
+  // Thesis Alg. 8 step 4: linearise again at the result for V_u and the information, over the capture
+  // range (taken over the final bound only, the closures came out weaker and the closed loop covered
+  // less: vog-bench mission, pilings / propeller mean coverage 0.97 / 0.85 against 1.00 / 0.98); fitness
+  // and correspondences within the final bound.
+  const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m,
+                                                  config.min_correspondence_distance_m);
+  if (lin.n_inliers < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
+  out.n_correspondences = lin.n_inliers;
+  out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
   fillConditioning(out, lin.AtA, comps, config.sigma_point_m,
                    config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);

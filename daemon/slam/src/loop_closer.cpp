@@ -70,6 +70,10 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: min_overlap_fraction = " + std::to_string(min_overlap_fraction) +
                  " must be in [0, 1]"};
   }
+  if (!(p2p_min_overlap_fraction >= 0.0 && p2p_min_overlap_fraction <= 1.0)) {
+    return Error{"loop closer config: p2p_min_overlap_fraction = " + std::to_string(p2p_min_overlap_fraction) +
+                 " must be in [0, 1]"};
+  }
   return Status::success();
 }
 
@@ -147,7 +151,9 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
     }
     const double overlap =
         static_cast<double>(icp->n_correspondences) / static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));
-    if (overlap < config_.min_overlap_fraction) {
+    const double min_overlap = config_.mode == LoopClosureMode::kPointToPoint2d ? config_.p2p_min_overlap_fraction
+                                                                                : config_.min_overlap_fraction;
+    if (overlap < min_overlap) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["overlap"];
       continue;

@@ -68,9 +68,11 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(la.point_to_plane.max_direction_stddev, lb.point_to_plane.max_direction_stddev);
   EXPECT_EQ(la.point_to_plane.sigma_point_m, lb.point_to_plane.sigma_point_m);
   EXPECT_EQ(la.point_to_plane.max_correspondence_distance_m, lb.point_to_plane.max_correspondence_distance_m);
+  EXPECT_EQ(la.point_to_plane.min_correspondence_distance_m, lb.point_to_plane.min_correspondence_distance_m);
   EXPECT_NEAR(la.max_heading_difference_rad, lb.max_heading_difference_rad, 1e-4);
   EXPECT_NEAR(la.max_yaw_disagreement_rad, lb.max_yaw_disagreement_rad, 1e-4);
   EXPECT_EQ(la.min_overlap_fraction, lb.min_overlap_fraction);
+  EXPECT_EQ(la.p2p_min_overlap_fraction, lb.p2p_min_overlap_fraction);
   EXPECT_EQ(la.acceptance.odometry_cov_x_m2_per_s, lb.acceptance.odometry_cov_x_m2_per_s);
   EXPECT_EQ(a.mapping.graph.loop_closure_loss_scale, b.mapping.graph.loop_closure_loss_scale);
   EXPECT_EQ(a.mapping.depth_stddev_m, b.mapping.depth_stddev_m);
@@ -95,6 +97,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(pa.gain_along_edge, pb.gain_along_edge);
   EXPECT_EQ(pa.assume_free_radius_m, pb.assume_free_radius_m);
   EXPECT_EQ(pa.root_tolerance_m, pb.root_tolerance_m);
+  EXPECT_EQ(pa.recovery_radius_m, pb.recovery_radius_m);
   EXPECT_EQ(pa.obstruction_retreat_m, pb.obstruction_retreat_m);
   EXPECT_EQ(pa.gain_unknown, pb.gain_unknown);
   EXPECT_EQ(pa.gain_free, pb.gain_free);

@@ -69,6 +69,46 @@ WallPair makeClouds(const std::vector<Plane>& planes, double normal_noise_rad) {
   return w;
 }
 
+// Two submaps overlap only in part: a face only the source saw, 0.5 m behind a face both saw, finds
+// its nearest target points on that face. Within a fixed 1 m bound it pulls the registration by
+// about its share of the points; with the bound shrinking to 0.3 m it drops out and the fitness
+// counts the overlap only.
+TEST(DegeneracyAwareIcp, ShrinkingBoundIgnoresAFaceOnlyTheSourceSaw) {
+  const std::vector<Plane> both = {wallX(), wallY()};
+  const Plane behind{{5.5, -3, -3}, {0, 0, 1}, {0, 1, 0}, 2.0, 2.0};
+  const PointCloud target = samplePlanes(both, Pose3::Identity(), 0.1, 0.01, 0.02, 21);
+  PointCloud source = samplePlanes(both, kTruth.inverse(), 0.1, 0.01, 0.02, 22);
+  const PointCloud extra = samplePlanes({behind}, kTruth.inverse(), 0.1, 0.01, 0.02, 23);
+  const std::size_t n_shared = source.size();
+  source.points.insert(source.points.end(), extra.points.begin(), extra.points.end());
+  source.normals.insert(source.normals.end(), extra.normals.begin(), extra.normals.end());
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.1;
+  x0(kY) -= 0.1;
+  x0(kYaw) += deg2rad(1.0);
+  const Vector6d truth = toXyzRpy(kTruth);
+
+  PointToPlaneConfig fixed;
+  fixed.min_correspondence_distance_m = fixed.max_correspondence_distance_m;
+  const auto biased = icpPointToPlane(source, target, fromXyzRpy(x0), fixed);
+  ASSERT_TRUE(biased.ok()) << biased.error().message;
+  EXPECT_GT(std::abs(toXyzRpy(biased->T_target_source)(kX) - truth(kX)), 0.05);
+  EXPECT_EQ(biased->n_correspondences, source.size());
+
+  const auto shrunk = icpPointToPlane(source, target, fromXyzRpy(x0), PointToPlaneConfig{});
+  ASSERT_TRUE(shrunk.ok()) << shrunk.error().message;
+  EXPECT_TRUE(shrunk->converged);
+  const Vector6d x = toXyzRpy(shrunk->T_target_source);
+  EXPECT_NEAR(x(kX), truth(kX), 0.01);
+  EXPECT_NEAR(x(kY), truth(kY), 0.01);
+  EXPECT_NEAR(x(kYaw), truth(kYaw), deg2rad(0.1));
+  // Fitness and correspondences within the final 0.3 m: the shared faces only.
+  EXPECT_LE(shrunk->n_correspondences, n_shared + n_shared / 50);
+  EXPECT_GE(shrunk->n_correspondences, n_shared - n_shared / 50);
+  EXPECT_LT(shrunk->fitness_m2, 0.01);
+  EXPECT_GT(biased->fitness_m2, 5.0 * shrunk->fitness_m2);
+}
+
 // Test (1): a single flat wall.
 TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry) {
   const WallPair w = makeClouds({wallX()}, 0.05);
@@ -239,6 +279,11 @@ TEST(Icp, BadInputIsAnErrorNeverANanPose) {
   auto bc = icpPointToPlane(w.source, w.target, kTruth, bad_cfg);
   ASSERT_FALSE(bc.ok());
   EXPECT_NE(bc.error().message.find("sigma_point_m"), std::string::npos);
+  PointToPlaneConfig bad_bound;
+  bad_bound.min_correspondence_distance_m = 2.0 * bad_bound.max_correspondence_distance_m;
+  auto bb = icpPointToPlane(w.source, w.target, kTruth, bad_bound);
+  ASSERT_FALSE(bb.ok());
+  EXPECT_NE(bb.error().message.find("min_correspondence_distance_m"), std::string::npos);
   // A cloud of points all at one spot: every direction is degenerate; the estimate stays finite.
   PointCloud blob;
   for (int i = 0; i < 50; ++i) {

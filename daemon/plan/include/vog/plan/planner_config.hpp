@@ -57,6 +57,11 @@ struct PlannerConfig {
   // of a safe waypoint, and a loop closure can move the estimate (not the vehicle) by tens of
   // centimetres (our choice: half the collision box's side plus the clearance; vog-bench mission).
   double root_tolerance_m = 0.6;
+  // Farther than root_tolerance_m from every safe voxel (a loop closure moved the map by more), the
+  // vehicle first moves straight to the nearest safe voxel within this distance that its collision box
+  // reaches without touching an occupied voxel (NbvPlanner::plan); 0 = off, "no path" instead (our
+  // choice: 1.5 m; vog-bench mission, propeller seed 2 otherwise ends after 10 submaps).
+  double recovery_radius_m = 1.5;
   // After an obstruction (NbvPlanner::reportObstruction) the vehicle first backs off this far the way
   // it came: three voxels, more than the any-heading box's one-voxel margin.
   double obstruction_retreat_m = 0.3;

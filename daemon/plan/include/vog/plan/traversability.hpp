@@ -61,6 +61,13 @@ class TraversabilityGrid {
   bool isSafeKey(const map::VoxelKey& key) const;
   // The centre of the safe voxel nearest to p within radius_m (ties: lowest z, y, x), or nullopt.
   std::optional<Eigen::Vector3d> nearestSafe(const Eigen::Vector3d& p_world, double radius_m) const;
+  // Recovery from outside the safe voxels (a loop closure moved the estimate next to a surface): the
+  // safe voxel nearest to p within radius_m that a box of full sides box_m at heading yaw_rad reaches
+  // by a straight translation from p without overlapping an occupied voxel (unknown space may be
+  // crossed: the vehicle's own near field is never observed; occupied voxels the box overlaps already
+  // at p do not count; ties: lowest z, y, x), or nullopt.
+  std::optional<Eigen::Vector3d> nearestSafeClearOfOccupied(const Eigen::Vector3d& p_world, double yaw_rad,
+                                                            const Eigen::Vector3d& box_m, double radius_m) const;
   // Is the collision box swept from a to b in known free space, with a and b in the exploration box?
   bool edgeIsFree(const Eigen::Vector3d& a_world, const Eigen::Vector3d& b_world) const;
   bool insideBox(const Eigen::Vector3d& p_world) const;

@@ -79,7 +79,20 @@ enum class IcpDofs {
 
 struct PointToPlaneConfig {
   int max_iterations = 30;
+  // Correspondences are searched within max_correspondence_distance_m at the first iteration (the
+  // capture range of the initial guess); the bound then shrinks by correspondence_shrink per
+  // iteration down to min_correspondence_distance_m, and only there can the ICP converge. The
+  // result's fitness and correspondence count are taken within the final bound. Two submaps of a
+  // profiling sonar overlap only in part: with a fixed 1 m bound the points of the faces only one of
+  // them saw pull the alignment towards them and dominate the fitness (on the pilings, vog-bench
+  // mission: the 1 m fitness of registrations within 0.2 m of the truth, 0.04-0.28 m^2 (10-90 %),
+  // overlapped that of the others, 0.07-0.36, and on the median a registration was no closer to the
+  // truth than its initial guess; shrinking to 0.3 m, three voxels of the map, halved the error of
+  // the rejected ones).
+  // Equal bounds: a fixed bound.
   double max_correspondence_distance_m = 1.0;
+  double min_correspondence_distance_m = 0.3;
+  double correspondence_shrink = 0.7;
   double convergence_epsilon = 1e-6;  // norm of the step (m and rad)
   // Standard deviation of a point-to-plane residual: sonar range resolution and voxel size.
   double sigma_point_m = 0.1;
