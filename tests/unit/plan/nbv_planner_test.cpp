@@ -454,6 +454,38 @@ TEST_F(PlannerMaps, SnappedRootIsTheFirstWaypoint) {
   EXPECT_EQ(r.waypoints.back().p_world, home.p_world);
 }
 
+TEST_F(PlannerMaps, FarFromTheSafeVoxelsTheVehicleRecoversInOneStraightMove) {
+  // The same spot 0.4 m from the west wall, with a root tolerance too small to reach a safe voxel (as
+  // after a loop closure that moved the map around the vehicle): the plan is one move, keeping the
+  // heading, to a safe voxel within recovery_radius_m; from there planning goes on. Without the
+  // recovery it is "no path", naming the key.
+  const auto map = full();
+  const Waypoint home{{-3.0, -1.5, -1.75}, 0.0};
+  PlannerConfig c = roomConfig();
+  c.global_max_candidates = 20;
+  c.root_tolerance_m = 0.05;
+  auto planner = NbvPlanner::create(c, home).value();
+  const Waypoint current{{-4.6, 0.0, -1.75}, 0.4};
+  ASSERT_FALSE(planner->plan(map, current).value().waypoints.empty());
+  ASSERT_FALSE(planner->traversability()->nearestSafe(current.p_world, c.root_tolerance_m).has_value());
+  const PlanResult r = planner->plan(map, current).value();
+  ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
+  EXPECT_NE(r.reason.find("recovering"), std::string::npos) << r.reason;
+  ASSERT_EQ(r.waypoints.size(), 1u);
+  const Waypoint& escape = r.waypoints.front();
+  EXPECT_TRUE(planner->traversability()->isSafe(escape.p_world));
+  EXPECT_EQ(escape.yaw_rad, current.yaw_rad);
+  EXPECT_LE((escape.p_world - current.p_world).norm(), c.recovery_radius_m);
+  EXPECT_GT(escape.p_world.x(), current.p_world.x());  // away from the wall
+  EXPECT_TRUE(planner->plan(map, escape).ok());
+
+  c.recovery_radius_m = 0.0;
+  auto off = NbvPlanner::create(c, home).value();
+  const PlanResult none = off->plan(map, current).value();
+  EXPECT_EQ(none.status, PlanStatus::kNoPath);
+  EXPECT_NE(none.reason.find("recovery_radius_m"), std::string::npos) << none.reason;
+}
+
 TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDropped) {
   // In the known room the vehicle at (-2, 0) heading east was stopped on its way to (0, 0) (by
   // something the map does not show): the next plan backs it off 0.3 m the way it came, keeping its

@@ -22,7 +22,9 @@
 // all (or no way home), it reports kNoPath instead of looping.
 // Root: when the vehicle's estimate is not a safe voxel, the tree grows from the nearest safe one
 // within root_tolerance_m and the result's waypoints start with that position: every edge the
-// vehicle is sent along is one the planner checked.
+// vehicle is sent along is one the planner checked. Farther than that from every safe voxel (a loop
+// closure moved the map), the result is one straight move to the nearest safe voxel within
+// recovery_radius_m that the collision box reaches clear of occupied voxels (reason "recovering ...").
 //
 // Lifecycle: create() with a config and the home (start) pose; then plan() with the newest snapshot
 // and the current pose, as often as needed. The planner only reads the snapshots it is given (it
