@@ -18,6 +18,15 @@ using map::VoxelKey;
 
 namespace {
 
+// Calls f for every key within `reach` voxels of centre on each axis, in (z, y, x) order.
+template <typename F>
+void forEachKeyWithin(const map::VoxelKey& centre, int reach, F&& f) {
+  map::VoxelKey d;
+  for (d.z() = -reach; d.z() <= reach; ++d.z())
+    for (d.y() = -reach; d.y() <= reach; ++d.y())
+      for (d.x() = -reach; d.x() <= reach; ++d.x()) f(centre + d);
+}
+
 constexpr std::size_t kMaxGridVoxels = 256u * 1024u * 1024u;
 constexpr auto kFree = static_cast<std::uint8_t>(map::Occupancy::kFree);
 
@@ -267,25 +276,25 @@ bool TraversabilityGrid::insideBox(const Eigen::Vector3d& p) const {
   return p.allFinite() && box_world_.contains(p);
 }
 
+std::vector<std::pair<double, VoxelKey>> TraversabilityGrid::safeKeysWithin(const Eigen::Vector3d& p_world,
+                                                                           double radius_m) const {
+  std::vector<std::pair<double, VoxelKey>> out;
+  const int reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
+  forEachKeyWithin(map::pointToKey(p_world, inv_resolution_), reach, [&](const VoxelKey& k) {
+    const Eigen::Vector3d c = map::keyToCentre(k, resolution_);
+    const double dist = (c - p_world).norm();
+    if (dist <= radius_m && insideBox(c) && isSafeKey(k)) out.emplace_back(dist, k);
+  });
+  // Visited in (z, y, x) order; stable_sort keeps that order for ties.
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
 std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafe(const Eigen::Vector3d& p_world, double radius_m) const {
   if (!p_world.allFinite() || !(radius_m >= 0.0)) return std::nullopt;
-  const int reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
-  const VoxelKey centre = map::pointToKey(p_world, inv_resolution_);
-  std::optional<Eigen::Vector3d> best;
-  double best_d = radius_m;
-  VoxelKey d;
-  for (d.z() = -reach; d.z() <= reach; ++d.z())
-    for (d.y() = -reach; d.y() <= reach; ++d.y())
-      for (d.x() = -reach; d.x() <= reach; ++d.x()) {
-        const VoxelKey k = centre + d;
-        const Eigen::Vector3d c = map::keyToCentre(k, resolution_);
-        const double dist = (c - p_world).norm();
-        if (dist <= best_d && (!best || dist < best_d) && insideBox(c) && isSafeKey(k)) {
-          best = c;
-          best_d = dist;
-        }
-      }
-  return best;
+  const auto keys = safeKeysWithin(p_world, radius_m);
+  if (keys.empty()) return std::nullopt;
+  return map::keyToCentre(keys.front().second, resolution_);
 }
 
 std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(const Eigen::Vector3d& p_world,
@@ -300,30 +309,16 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(co
   Eigen::Vector3d h;
   for (int i = 0; i < 3; ++i) h[i] = 0.5 * box_m[i] + 0.5 * resolution_ * R.col(i).cwiseAbs().sum();
   // Occupied voxels that any candidate sweep could touch: within radius + the box's half-diagonal.
-  const double reach_m = radius_m + h.norm();
-  const int reach = static_cast<int>(std::ceil(reach_m * inv_resolution_));
-  const VoxelKey centre = map::pointToKey(p_world, inv_resolution_);
   std::vector<Eigen::Vector3d> occupied_box;  // q - p in the box frame
-  std::vector<std::pair<double, VoxelKey>> candidates;
-  const int cand_reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
-  VoxelKey d;
-  for (d.z() = -reach; d.z() <= reach; ++d.z())
-    for (d.y() = -reach; d.y() <= reach; ++d.y())
-      for (d.x() = -reach; d.x() <= reach; ++d.x()) {
-        const VoxelKey k = centre + d;
-        const Eigen::Vector3d c = map::keyToCentre(k, resolution_);
-        if (status(k) == map::Occupancy::kOccupied) {
-          // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle
-          // (it is physically there): they cannot be avoided and do not count.
-          const Eigen::Vector3d q = R.transpose() * (c - p_world);
-          if (!(q.array().abs() <= h.array()).all()) occupied_box.push_back(q);
-        }
-        if ((d.array().abs() <= cand_reach).all() && (c - p_world).norm() <= radius_m && insideBox(c) && isSafeKey(k))
-          candidates.emplace_back((c - p_world).norm(), k);
-      }
-  // Nearest first; the loops above visit keys in (z, y, x) order and stable_sort keeps it for ties.
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  const int reach = static_cast<int>(std::ceil((radius_m + h.norm()) * inv_resolution_));
+  forEachKeyWithin(map::pointToKey(p_world, inv_resolution_), reach, [&](const VoxelKey& k) {
+    if (status(k) != map::Occupancy::kOccupied) return;
+    // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle (it
+    // is physically there): they cannot be avoided and do not count.
+    const Eigen::Vector3d q = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);
+    if (!(q.array().abs() <= h.array()).all()) occupied_box.push_back(q);
+  });
+  const auto candidates = safeKeysWithin(p_world, radius_m);
   for (const auto& [dist, k] : candidates) {
     const Eigen::Vector3d move = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);
     bool touches = false;

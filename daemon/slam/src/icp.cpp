@@ -319,8 +319,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   out.T_target_source = fromXyzRpy(x);
   // Thesis Alg. 8 step 4: linearise again at the result for V_u and the information, over the capture
   // range (taken over the final bound only, the closures came out weaker and the closed loop covered
-  // less: vog-bench mission, pilings / propeller mean coverage 0.97 / 0.85 against 1.00 / 0.98); fitness
-  // and correspondences within the final bound.
+  // less: vog-bench mission, pilings / propeller mean coverage 0.97 / 0.85 against 1.00 / 0.89, both
+  // without the planner's recovery move); fitness and correspondences within the final bound.
   const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m,
                                                   config.min_correspondence_distance_m);
   if (lin.n_inliers < config.min_correspondences) return Error{"icp: too few correspondences at the result"};

@@ -29,6 +29,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace vog::plan {
@@ -104,6 +105,9 @@ class TraversabilityGrid {
            (map::keyToCentre(k, resolution_) - assumed_free_.centre_world).norm() <= assumed_free_.radius_m;
   }
   TraversabilityGrid() = default;
+  // Safe voxels inside the exploration box within radius_m of p: (distance, key), nearest first
+  // (ties: lowest z, y, x).
+  std::vector<std::pair<double, map::VoxelKey>> safeKeysWithin(const Eigen::Vector3d& p_world, double radius_m) const;
   std::size_t indexOf(const map::VoxelKey& k) const {
     const map::VoxelKey d = k - grid_.min;
     return static_cast<std::size_t>(d.x()) +
