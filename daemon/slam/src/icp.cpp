@@ -62,8 +62,7 @@ struct Linearisation {
   Eigen::MatrixXd AtA;  // m x m over the estimated components
   Eigen::VectorXd Atb;  // m, with b = -r
   std::size_t n = 0;
-  double sum_sq_distance = 0.0;
-  // Of those, the correspondences within the inlier bound.
+  // Of those, the correspondences within the inlier bound and their squared distances.
   std::size_t n_inliers = 0;
   double sum_sq_inliers = 0.0;
 };
@@ -92,7 +91,6 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
     for (Eigen::Index c = 0; c < m; ++c) J(c) = J_full(comps[static_cast<std::size_t>(c)]);
     lin.AtA.noalias() += J.transpose() * J;
     lin.Atb.noalias() -= J.transpose() * r;
-    lin.sum_sq_distance += dist_sq;
     ++lin.n;
     if (dist_sq <= inlier_dist_m * inlier_dist_m) {
       lin.sum_sq_inliers += dist_sq;

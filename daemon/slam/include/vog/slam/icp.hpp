@@ -36,7 +36,9 @@ namespace vog::slam {
 struct IcpResult {
   bool converged = false;
   int iterations = 0;
-  double fitness_m2 = 0.0;  // mean squared distance between corresponding points at the result
+  // Mean squared distance between corresponding points at the result, and their number (point-to-
+  // plane: within the final correspondence bound).
+  double fitness_m2 = 0.0;
   std::size_t n_correspondences = 0;
   geometry::Pose3 T_target_source = geometry::Pose3::Identity();
   // A^T A / sigma^2 at the result over (x, y, z, roll, pitch, yaw); rows/columns of components that
