@@ -2,6 +2,7 @@
 
 #include <octomap/OcTree.h>
 
+#include <atomic>
 #include <cmath>
 
 namespace vog::map {
@@ -29,6 +30,12 @@ std::uint64_t MergedMap::packBlock(const VoxelKey& b) {
 VoxelKey MergedMap::unpackBlock(std::uint64_t p) {
   return {static_cast<int>(p & kPackMask) - kPackBias, static_cast<int>((p >> kPackBits) & kPackMask) - kPackBias,
           static_cast<int>((p >> (2 * kPackBits)) & kPackMask) - kPackBias};
+}
+
+MergedMap::MergedMap(const GridConfig& config)
+    : config_(config), bounds_(config.bounds()), inv_resolution_(1.0 / config.resolution_m) {
+  static std::atomic<std::uint64_t> next_writer_id{1};
+  writer_id_ = next_writer_id.fetch_add(1, std::memory_order_relaxed);
 }
 
 Result<std::unique_ptr<MergedMap>> MergedMap::create(const GridConfig& config) {

@@ -67,7 +67,8 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
     resolution_m_ = map.resolution();
   }
   if (grid_) {
-    // An older snapshot (another writer, or a restart) cannot be caught up with: rebuild.
+    // A snapshot of another writer (a restart, or a map rebuilt from scratch) or an older one cannot
+    // be caught up with: rebuild.
     if (grid_->update(map).ok()) return {};
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);

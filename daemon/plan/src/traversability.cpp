@@ -127,6 +127,7 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
   for (const auto& [origin, block] : map.blocksChangedSince(0)) g.readBlock(origin, block.get());
   g.recompute(g.grid_);
   g.map_version_ = map.version();
+  g.map_writer_ = map.writerId();
   return g;
 }
 
@@ -200,6 +201,7 @@ void TraversabilityGrid::recompute(KeyBox region) {
 
 Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) {
   if (newer.resolution() != resolution_) return Error{"traversability: snapshot resolution differs from the grid's"};
+  if (newer.writerId() != map_writer_) return Error{"traversability: the snapshot is of another map than the grid's"};
   if (newer.version() < map_version_) {
     std::ostringstream s;
     s << "traversability: snapshot version " << newer.version() << " is older than the grid's " << map_version_;

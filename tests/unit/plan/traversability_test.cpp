@@ -196,6 +196,27 @@ TEST(Traversability, PathAroundAWallThroughADoor) {
   EXPECT_TRUE(through_door);
 }
 
+TEST(Traversability, ASnapshotOfAnotherMapIsAnErrorEvenAtTheSameVersion) {
+  // Two maps built the same way (one submap each, so the same version) but of different rooms: the
+  // grid of the first cannot catch up with the second by its changed blocks (there are none since
+  // that version); update() must refuse so that the caller rebuilds.
+  const map::GridConfig config;
+  auto all = [](const map::VoxelKey&) { return true; };
+  const Eigen::AlignedBox3d small(Eigen::Vector3d(-2.0, -2.0, -2.0), Eigen::Vector3d(0.0, 2.0, -0.5));
+  const Eigen::AlignedBox3d large(Eigen::Vector3d(-2.0, -2.0, -2.0), Eigen::Vector3d(2.0, 2.0, -0.5));
+  auto a = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, small, all)});
+  auto b = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, large, all)});
+  ASSERT_EQ(a->version(), b->version());
+  ASSERT_NE(a->writerId(), b->writerId());
+  auto grid = TraversabilityGrid::build(*a->snapshot(), large, kCollisionBox).value();
+  const auto u = grid.update(*b->snapshot());
+  ASSERT_FALSE(u.ok());
+  EXPECT_NE(u.error().message.find("another map"), std::string::npos);
+  // Snapshots of one writer share its id.
+  EXPECT_EQ(a->snapshot()->writerId(), a->writerId());
+  EXPECT_TRUE(grid.update(*a->snapshot()).ok());
+}
+
 TEST(Traversability, BadBoxesAreErrors) {
   const map::GridConfig config;
   auto map = map::MergedMap::create(config).value();

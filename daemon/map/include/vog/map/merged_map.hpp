@@ -104,6 +104,9 @@ class MergedMap {
   const GridConfig& config() const { return config_; }
   double resolution() const { return config_.resolution_m; }
   std::uint64_t version() const { return version_; }
+  // Which MergedMap this is or was snapshotted from (unique in the process): versions, and so
+  // blocksChangedSince / blocksRemovedSince, compare only between snapshots of the same writer.
+  std::uint64_t writerId() const { return writer_id_; }
   std::size_t submapCount() const { return merged_.size(); }
   bool contains(SubmapId id) const { return merged_.count(id) != 0; }
   std::size_t blockCount() const { return blocks_.size(); }
@@ -130,8 +133,7 @@ class MergedMap {
   MergedMap& operator=(const MergedMap&) = delete;
 
  private:
-  explicit MergedMap(const GridConfig& config)
-      : config_(config), bounds_(config.bounds()), inv_resolution_(1.0 / config.resolution_m) {}
+  explicit MergedMap(const GridConfig& config);
 
   static std::uint64_t packBlock(const VoxelKey& block);
   static VoxelKey unpackBlock(std::uint64_t packed);
@@ -154,6 +156,7 @@ class MergedMap {
   std::unordered_map<std::uint64_t, std::uint64_t> removed_;  // packed block -> version it was erased at
   std::map<SubmapId, SubmapEntry> merged_;  // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
+  std::uint64_t writer_id_ = 0;
 };
 
 template <class F>

@@ -53,8 +53,9 @@ class TraversabilityGrid {
   static Result<TraversabilityGrid> build(const map::MergedMap& map, const Eigen::AlignedBox3d& box_world,
                                           const Eigen::Vector3d& collision_box_m, const AssumedFree& assumed_free = {});
 
-  // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot with an
-  // older version than the grid's, or of another resolution, gives an error (the caller rebuilds).
+  // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot of
+  // another MergedMap (writerId), with an older version than the grid's, or of another resolution
+  // gives an error (the caller rebuilds).
   Result<TraversabilityUpdate> update(const map::MergedMap& newer);
 
   // Is a collision box centred at p (world) inside the exploration box and in known free space?
@@ -130,6 +131,7 @@ class TraversabilityGrid {
   std::vector<std::uint8_t> status_;  // map::Occupancy per voxel
   std::vector<std::uint8_t> safe_;   // 1 = a box centred in this voxel is in known free space
   std::uint64_t map_version_ = 0;
+  std::uint64_t map_writer_ = 0;  // MergedMap::writerId() of the snapshots this grid reflects
 };
 
 }  // namespace vog::plan
