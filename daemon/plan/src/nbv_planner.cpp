@@ -126,16 +126,20 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   PlanResult result;
   result.map_version = map.version();
   tree_.clear();
+  // A plan that is one straight move keeping the heading (no tree beyond the current pose).
+  auto moveTo = [&](const Eigen::Vector3d& target, std::string reason) {
+    result.status = PlanStatus::kExplore;
+    result.waypoints = {Waypoint{target, current.yaw_rad}};
+    result.best_branch = {current, result.waypoints.front()};
+    result.tree_size = 1;
+    result.reason = std::move(reason);
+    tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
+    return result;
+  };
   if (const std::optional<Eigen::Vector3d> back = std::exchange(pending_retreat_, std::nullopt)) {
     // Stopped by an obstruction: first back off the way the vehicle came (the one direction known
     // to be clear), then plan from there.
-    result.status = PlanStatus::kExplore;
-    result.waypoints = {Waypoint{*back, current.yaw_rad}};
-    result.best_branch = {current, result.waypoints.front()};
-    result.tree_size = 1;
-    result.reason = "backing off an obstruction to " + describe(*back);
-    tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
-    return result;
+    return moveTo(*back, "backing off an obstruction to " + describe(*back));
   }
   std::vector<Waypoint> seed;
   seed.swap(seed_branch_);
@@ -146,22 +150,17 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   if (!grid_->isSafe(current.p_world)) {
     const auto snapped = grid_->nearestSafe(current.p_world, config_.root_tolerance_m);
     if (!snapped) {
-      result.tree_size = 1;
       // Farther from the safe voxels than the vehicle can have strayed: a loop closure moved the map
       // around it, typically nearer a surface than the estimate had it. It is physically where it was a
       // moment ago, so it moves straight (keeping its heading) to the nearest safe voxel that its box
       // reaches without touching an occupied voxel.
       if (const auto escape = grid_->nearestSafeClearOfOccupied(current.p_world, current.yaw_rad,
                                                                config_.collision_box_m, config_.recovery_radius_m)) {
-        result.status = PlanStatus::kExplore;
-        result.waypoints = {Waypoint{*escape, current.yaw_rad}};
-        result.best_branch = {current, result.waypoints.front()};
-        result.reason = "recovering: the current position " + describe(current.p_world) +
-                        " is not in the safe region; moving to " + describe(*escape);
-        tree_.push_back(TreeNode{current, -1, 0.0, 0.0, 0.0, false});
-        return result;
+        return moveTo(*escape, "recovering: the current position " + describe(current.p_world) +
+                                   " is not in the safe region; moving to " + describe(*escape));
       }
       result.status = PlanStatus::kNoPath;
+      result.tree_size = 1;
       result.reason = "the collision box at the current position " + describe(current.p_world) +
                       " is not entirely in known free space (nor within plan.root_tolerance_m, and no safe voxel"
                       " within plan.recovery_radius_m is reachable clear of occupied space)";

@@ -27,6 +27,24 @@ void forEachKeyWithin(const map::VoxelKey& centre, int reach, F&& f) {
       for (d.x() = -reach; d.x() <= reach; ++d.x()) f(centre + d);
 }
 
+// Does a box of half-extents h (its own frame), translated from the origin by `move`, reach the point
+// q (same frame)? Some t in [0, 1] must give |q_i - t move_i| <= h_i on every axis.
+bool sweptBoxReaches(const Eigen::Vector3d& q, const Eigen::Vector3d& move, const Eigen::Vector3d& h) {
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 3; ++i) {
+    if (move[i] == 0.0) {
+      if (std::abs(q[i]) > h[i]) return false;
+      continue;
+    }
+    double t0 = (q[i] - h[i]) / move[i], t1 = (q[i] + h[i]) / move[i];
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+    if (lo > hi) return false;
+  }
+  return true;
+}
+
 constexpr std::size_t kMaxGridVoxels = 256u * 1024u * 1024u;
 constexpr auto kFree = static_cast<std::uint8_t>(map::Occupancy::kFree);
 
@@ -318,31 +336,14 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(co
     // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle (it
     // is physically there): they cannot be avoided and do not count.
     const Eigen::Vector3d q = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);
-    if (!(q.array().abs() <= h.array()).all()) occupied_box.push_back(q);
+    if (!sweptBoxReaches(q, Eigen::Vector3d::Zero(), h)) occupied_box.push_back(q);
   });
-  const auto candidates = safeKeysWithin(p_world, radius_m);
-  for (const auto& [dist, k] : candidates) {
-    const Eigen::Vector3d move = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);
-    bool touches = false;
-    for (const Eigen::Vector3d& q : occupied_box) {
-      // Does some t in [0, 1] give |q_i - t move_i| <= h_i on every axis?
-      double lo = 0.0, hi = 1.0;
-      for (int i = 0; i < 3 && lo <= hi; ++i) {
-        if (move[i] == 0.0) {
-          if (std::abs(q[i]) > h[i]) hi = -1.0;
-          continue;
-        }
-        double t0 = (q[i] - h[i]) / move[i], t1 = (q[i] + h[i]) / move[i];
-        if (t0 > t1) std::swap(t0, t1);
-        lo = std::max(lo, t0);
-        hi = std::min(hi, t1);
-      }
-      if (lo <= hi) {
-        touches = true;
-        break;
-      }
-    }
-    if (!touches) return map::keyToCentre(k, resolution_);
+  for (const auto& candidate : safeKeysWithin(p_world, radius_m)) {
+    const Eigen::Vector3d c = map::keyToCentre(candidate.second, resolution_);
+    const Eigen::Vector3d move = R.transpose() * (c - p_world);
+    const bool touches = std::any_of(occupied_box.begin(), occupied_box.end(),
+                                     [&](const Eigen::Vector3d& q) { return sweptBoxReaches(q, move, h); });
+    if (!touches) return c;
   }
   return std::nullopt;
 }

@@ -106,6 +106,12 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
   auto pairs = findLoopCandidates(footprints, config_.candidates);
   if (!pairs) return Error{"loop closer: " + pairs.error().message};
 
+  // The point-to-point mode's fitness and overlap are measured differently and have their own bounds.
+  const bool p2p = config_.mode == LoopClosureMode::kPointToPoint2d;
+  IcpAcceptanceConfig bounds = config_.acceptance;
+  if (p2p) bounds.max_fitness_m2 = config_.p2p_max_fitness_m2;
+  const double min_overlap = p2p ? config_.p2p_min_overlap_fraction : config_.min_overlap_fraction;
+
   LoopCloseOutcome out;
   const LoopSubmap& source = submaps[newest];
   for (const auto& [i, j] : pairs.value()) {
@@ -121,7 +127,7 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
     // T_target_source predicted by the current estimates (the odometry chain plus earlier closures).
     const geometry::Pose3 T_prior = target.T_world_submap.inverse() * source.T_world_submap;
     Result<IcpResult> icp = Error{""};
-    if (config_.mode == LoopClosureMode::kPointToPoint2d) {
+    if (p2p) {
       icp = icpPointToPoint2d(source.grid->cloud(), target.grid->cloud(), T_prior, config_.p2p);
     } else {
       PointToPlaneConfig c = config_.point_to_plane;
@@ -134,8 +140,6 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
       continue;
     }
     const double dt_s = 1e-9 * static_cast<double>(source.first_stamp_ns - target.first_stamp_ns);
-    IcpAcceptanceConfig bounds = config_.acceptance;
-    if (config_.mode == LoopClosureMode::kPointToPoint2d) bounds.max_fitness_m2 = config_.p2p_max_fitness_m2;
     const IcpAcceptance acc = checkIcpAcceptance(icp.value(), T_prior, dt_s, bounds);
     if (!acc.accepted) {
       ++out.stats.rejected;
@@ -151,8 +155,6 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
     }
     const double overlap =
         static_cast<double>(icp->n_correspondences) / static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));
-    const double min_overlap = config_.mode == LoopClosureMode::kPointToPoint2d ? config_.p2p_min_overlap_fraction
-                                                                                : config_.min_overlap_fraction;
     if (overlap < min_overlap) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["overlap"];

@@ -191,6 +191,9 @@ TEST_F(PlannerMaps, ErrorsNameTheBadInput) {
   c.clearance_m = -0.1;
   expectError(c, start, "plan.clearance_m");
   c = roomConfig();
+  c.recovery_radius_m = -1.0;
+  expectError(c, start, "plan.recovery_radius_m");
+  c = roomConfig();
   c.max_heading_change_rad = 4.0;
   expectError(c, start, "plan.max_heading_change_rad");
   c = roomConfig();
@@ -466,9 +469,8 @@ TEST_F(PlannerMaps, FarFromTheSafeVoxelsTheVehicleRecoversInOneStraightMove) {
   c.root_tolerance_m = 0.05;
   auto planner = NbvPlanner::create(c, home).value();
   const Waypoint current{{-4.6, 0.0, -1.75}, 0.4};
-  ASSERT_FALSE(planner->plan(map, current).value().waypoints.empty());
-  ASSERT_FALSE(planner->traversability()->nearestSafe(current.p_world, c.root_tolerance_m).has_value());
   const PlanResult r = planner->plan(map, current).value();
+  ASSERT_FALSE(planner->traversability()->nearestSafe(current.p_world, c.root_tolerance_m).has_value());
   ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
   EXPECT_NE(r.reason.find("recovering"), std::string::npos) << r.reason;
   ASSERT_EQ(r.waypoints.size(), 1u);

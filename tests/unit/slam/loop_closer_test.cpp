@@ -106,6 +106,11 @@ TEST(LoopCloser, BadInputIsAnError) {
   auto c = LoopCloser::create(bad);
   ASSERT_FALSE(c.ok());
   EXPECT_NE(c.error().message.find("min_overlap_fraction"), std::string::npos);
+  LoopCloserConfig bad_p2p;
+  bad_p2p.p2p_min_overlap_fraction = -0.1;
+  auto c2 = LoopCloser::create(bad_p2p);
+  ASSERT_FALSE(c2.ok());
+  EXPECT_NE(c2.error().message.find("p2p_min_overlap_fraction"), std::string::npos);
 }
 
 }  // namespace
