@@ -118,8 +118,18 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   }
   truth_grid.finalize();
   const vog::bench::ReferenceReconstruction reference(truth_grid);
+  // The final map, with a snapshot after every 10th submap for the coverage over time (snapshots
+  // share blocks copy-on-write).
+  auto merged = vog::map::MergedMap::create(grid);
+  if (!merged) return fail(merged.error().message);
+  std::map<std::size_t, std::shared_ptr<const vog::map::MergedMap>> snapshot_at;  // n_submaps -> map
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (auto st = (*merged)->add(entries[i]); !st) return fail(st.error().message);
+    if ((i + 1) % 10 == 0 || i + 1 == entries.size()) snapshot_at[i + 1] = (*merged)->snapshot();
+  }
+  // The reconstruction: the final map's occupied voxels (what vogd serves as its cloud).
   std::vector<Eigen::Vector3d> estimate;
-  for (const vog::map::SubmapEntry& e : entries) vog::bench::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
+  vog::bench::appendOccupiedCentres(**merged, estimate);
   auto error = vog::bench::reconstructionError(estimate, reference);
   if (!error) return fail(error.error().message);
 
@@ -132,14 +142,9 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   if (!observable) return fail(observable.error().message);
   std::vector<Eigen::Vector3d> observable_in_map;
   for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(error->T_reference_estimate.inverse() * p);
-  auto merged = vog::map::MergedMap::create(grid);
-  if (!merged) return fail(merged.error().message);
   std::map<std::size_t, double> coverage_at;  // n_submaps -> coverage
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    if (auto st = (*merged)->add(entries[i]); !st) return fail(st.error().message);
-    if ((i + 1) % 10 == 0 || i + 1 == entries.size())
-      coverage_at[i + 1] = vog::bench::coverageOf(**merged, observable_in_map, 2 * grid.resolution_m);
-  }
+  for (const auto& [n, snapshot] : snapshot_at)
+    coverage_at[n] = vog::bench::coverageOf(*snapshot, observable_in_map, 2 * grid.resolution_m);
   const double coverage = coverage_at.empty() ? 0.0 : coverage_at.rbegin()->second;
   const double coverage_unaligned = vog::bench::coverageOf(**merged, observable->points.points, 2 * grid.resolution_m);
 

@@ -11,15 +11,21 @@
 //             gain at the end point of an edge only);
 //   vog       VOG-Map of submaps at raw odometry, the sonar planner (constrained sampling, gain swept
 //             along each edge), no loop closures;
-//   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges).
+//   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges); it also
+//             scores the same run's submaps at their raw odometry poses (rmse_same_run_odometry: the
+//             thesis's Fig. 4.12(b), the run of (c) with its loop closures unused).
 // All three use the planner's global search (PlannerConfig::global_search) so that "complete" means
 // the same in every mode; --global-search 0 gives Bircher's local rule. Its map update (a finalized
 // copy of the global tree per planning call) is the baseline's "merge".
 // The planner works in the estimated (map) frame; a waypoint reaches the simulated vehicle through the
 // current navigation error, as a real controller steering on its own estimate would follow it.
+// The reconstruction scored in every mode is the final map's occupied voxels (the merged map; the
+// baseline's global tree), the product vogd serves as its cloud: the modes differ in how they fuse
+// scans, so the comparison is between what each one delivers. Coverage reads the same map.
 // Outputs one JSON object, and with --out the per-iteration CSVs that scripts/plot-mission draws, plus
-// collisions.csv (every refused move: true and estimated pose, the map's and the scene's clearance)
-// and coverage_points.csv (the observable points and whether the final map covers them).
+// collisions.csv (every refused move: true and estimated pose, the map's and the scene's clearance),
+// closures.csv (every accepted loop closure and its error against the truth, as vog-bench slam judges
+// it) and coverage_points.csv (the observable points and whether the final map covers them).
 // Timing fields (wall_s, wall_total_s, realtime_factor, cpu_s, *_ms_*) vary from run to run; all
 // others depend only on the seed. wall_s is the mission's: simulation, mapping, merging and planning,
 // without the evaluation (the observable set, the reference grid at true poses, coverage), which
@@ -51,6 +57,7 @@
 #include <iostream>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,11 +86,13 @@ class ScanQueue final : public sim::SimulationSink {
     p.input.z_roll_pitch = Eigen::Vector3d(T_odom.translation().z(), rpy.x(), rpy.y());
     p.input.scan = ping.scan;
     p.T_true = T_true;
+    T_true_by_stamp[ping.scan.stamp_ns] = T_true;
     pending.push_back(std::move(p));
   }
   void truth(const sim::VehicleState& /*state*/, const Pose3& T_odom) override { T_odom_now = T_odom; }
 
   std::deque<PendingScan> pending;
+  std::map<std::int64_t, Pose3> T_true_by_stamp;  // every scan's true pose (closures are judged by it)
   Pose3 T_odom_now = Pose3::Identity();
 };
 
@@ -93,32 +102,6 @@ plan::Waypoint toWaypoint(const Pose3& T) {
 
 Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
   return vog::geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
-}
-
-// Share of `points` (world frame) within `radius` of an occupied voxel of `snapshot`; `flags`, when
-// given, receives one covered flag per point.
-double coverageOf(const map::MergedMap& snapshot, const std::vector<Eigen::Vector3d>& points, double radius_m,
-                  std::vector<bool>* flags = nullptr) {
-  if (flags != nullptr) flags->assign(points.size(), false);
-  if (points.empty()) return 0.0;
-  const double res = snapshot.resolution();
-  const int reach = static_cast<int>(std::ceil(radius_m / res));
-  std::size_t covered = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const map::VoxelKey centre = map::pointToKey(p, 1.0 / res);
-    bool hit = false;
-    for (int dz = -reach; dz <= reach && !hit; ++dz)
-      for (int dy = -reach; dy <= reach && !hit; ++dy)
-        for (int dx = -reach; dx <= reach && !hit; ++dx) {
-          const map::VoxelKey k = centre + map::VoxelKey(dx, dy, dz);
-          if ((map::keyToCentre(k, res) - p).norm() > radius_m) continue;
-          hit = snapshot.at(k).status == map::Occupancy::kOccupied;
-        }
-    if (hit) ++covered;
-    if (flags != nullptr) (*flags)[i] = hit;
-  }
-  return static_cast<double>(covered) / static_cast<double>(points.size());
 }
 
 // CPU time of the calling thread, s (the planner's own work, not the wait for a shared core).
@@ -220,8 +203,15 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                  "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
                  "the fix, to reproduce the collisions it caused");
   app.add_option("--lc-max-fitness", mc.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
-  double max_heading_deg = mc.loop_closer.max_heading_difference_rad * 180.0 / std::numbers::pi;
-  app.add_option("--lc-max-heading-deg", max_heading_deg, "loop closures: viewing-direction gate, deg");
+  app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
+                 "loop closures: share of the source cloud with a correspondence at the result");
+  app.add_option_function<double>(
+      "--lc-max-yaw-disagreement-deg",
+      [&](double deg) { mc.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },
+      "loop closures: largest yaw difference between a registration and its prior, deg");
+  app.add_option_function<double>(
+      "--lc-max-heading-deg", [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
+      "loop closures: viewing-direction gate, deg");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
@@ -265,7 +255,6 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   sim::LockstepSimulation& simulation = *sim_r;
 
   // Mapping: library defaults.
-  mc.loop_closer.max_heading_difference_rad = max_heading_deg * std::numbers::pi / 180.0;
   mc.loop_closures = mode == Mode::kVogLc;
   mc.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
   auto pipeline_r = slam::MappingPipeline::create(mc);
@@ -485,7 +474,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       row.root_shift_m = (planner.lastTree().front().w.p_world - estimatedPose().translation()).norm();
     if (row.iteration % coverage_every == 0) {
       const vog::bench::Stopwatch coverage_time;
-      row.coverage = coverageOf(**snap, observable->points.points, 2 * grid_config.resolution_m);
+      row.coverage = vog::bench::coverageOf(**snap, observable->points.points, 2 * grid_config.resolution_m);
       evaluation_s += coverage_time.seconds();
     }
     iterations.push_back(row);
@@ -516,24 +505,55 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   const double mission_wall_s = mission.seconds() - evaluation_s;
   truth_grid.finalize();
   const vog::bench::ReferenceReconstruction reference(truth_grid);
+  // The reconstruction is the final map's occupied voxels in every mode: what vogd serves as its cloud.
   std::vector<Eigen::Vector3d> estimate;
-  if (mode == Mode::kBaseline) {
-    global.finalize();
-    vog::bench::appendOccupiedCentres(global, Pose3::Identity(), estimate);
-  } else {
-    for (const map::SubmapEntry& e : pipeline.map().entries())
-      vog::bench::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
-  }
+  vog::bench::appendOccupiedCentres(**final_snap, estimate);
   auto error = vog::bench::reconstructionError(estimate, reference);
   if (!error) return fail(error.error().message);
+  // Thesis Fig. 4.12(b): the same run's submaps at their raw odometry poses, loop closures unused.
+  std::optional<double> rmse_same_run_odometry;
+  if (mode == Mode::kVogLc) {
+    auto odometry_map = map::MergedMap::create(grid_config);
+    if (!odometry_map) return fail(odometry_map.error().message);
+    const std::vector<map::SubmapEntry> entries = pipeline.map().entries();
+    for (std::size_t k = 0; k < entries.size(); ++k) {
+      map::SubmapEntry e = entries[k];
+      e.T_world_submap = pipeline.submaps()[k].T_world_base_odom;
+      e.T_submap_world = e.T_world_submap.inverse();
+      if (auto st = (*odometry_map)->add(e); !st) return fail(st.error().message);
+    }
+    std::vector<Eigen::Vector3d> points;
+    vog::bench::appendOccupiedCentres(**odometry_map, points);
+    auto e = vog::bench::reconstructionError(points, reference);
+    if (!e) return fail(e.error().message);
+    rmse_same_run_odometry = e->rmse_m;
+  }
   // Final coverage after the same rigid alignment as the RMSE (the map lives in the estimated frame):
   // the observable points are mapped into it.
   std::vector<Eigen::Vector3d> observable_in_map;
   const Pose3 T_estimate_reference = error->T_reference_estimate.inverse();
   for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(T_estimate_reference * p);
+  // Every accepted closure against the truth (the true relative pose of the two base scans), as
+  // vog-bench slam judges them: wrong when off by more than 0.2 m or 2 deg in what it asserts.
+  struct ClosureRow {
+    const slam::LoopClosure* closure;
+    slam::ClosureError error;
+    double correction_m;  // how far the registration moved the relative pose from its prior
+  };
+  std::vector<ClosureRow> closure_rows;
+  std::int64_t closures_wrong = 0;
+  for (const slam::LoopClosure& lc : pipeline.closures()) {
+    auto trueBase = [&](std::int64_t index) {
+      return queue.T_true_by_stamp.at(pipeline.submaps()[static_cast<std::size_t>(index)].first_stamp_ns);
+    };
+    const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
+    const slam::ClosureError e = slam::closureError(lc, T_true, 0.2, vog::geometry::deg2rad(2.0));
+    closures_wrong += e.wrong ? 1 : 0;
+    closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
+  }
   std::vector<bool> covered_flags;
-  const double coverage = coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
-  const double coverage_unaligned = coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
+  const double coverage = vog::bench::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
+  const double coverage_unaligned = vog::bench::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
   if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
 
   if (!out_dir.empty()) {
@@ -567,6 +587,13 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       const Eigen::Vector3d& p = observable_in_map[i];
       cp << p.x() << ',' << p.y() << ',' << p.z() << ',' << (covered_flags[i] ? 1 : 0) << '\n';
     }
+    std::ofstream cl(std::filesystem::path(out_dir) / "closures.csv");
+    cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong\n";
+    for (const ClosureRow& r : closure_rows) {
+      cl << r.closure->from << ',' << r.closure->to << ',' << r.closure->factor.rank() << ','
+         << r.closure->icp.fitness_m2 << ',' << r.correction_m << ',' << r.error.translation_m << ','
+         << r.error.rotation_rad * 180.0 / std::numbers::pi << ',' << (r.error.wrong ? 1 : 0) << '\n';
+    }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
     mg << "sim_s,n_submaps,merge_ms,remerged\n";
     for (const MergeRow& r : merges) mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << '\n';
@@ -579,7 +606,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     std::ofstream mp(std::filesystem::path(out_dir) / "map_points.csv");
     mp << "x_m,y_m,z_m\n";
     for (const Eigen::Vector3d& p : estimate) mp << p.x() << ',' << p.y() << ',' << p.z() << '\n';
-    for (const std::ofstream* f : {&it, &mg, &pa, &mp, &co, &cp})
+    for (const std::ofstream* f : {&it, &mg, &pa, &mp, &co, &cp, &cl})
       if (!*f) return fail("error while writing the CSV files in " + out_dir);
   }
 
@@ -593,11 +620,13 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("coverage_unaligned", coverage_unaligned);
   out.add("rmse", error->rmse_m);
   out.add("rmse_unaligned", error->rmse_unaligned_m);
+  if (rmse_same_run_odometry) out.add("rmse_same_run_odometry", *rmse_same_run_odometry);
   out.add("path_m", path_m);
   out.add("n_submaps", static_cast<std::int64_t>(nSubmaps()));
   out.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
   // Loop-closure attempts and why the others were rejected (the reasons of LoopCloser).
   const slam::LoopCloseStats& lc = pipeline.loopStats();
+  out.add("closures_wrong", closures_wrong);
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
   std::string reasons;

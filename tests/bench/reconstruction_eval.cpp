@@ -20,6 +20,13 @@ void appendOccupiedCentres(const map::LocalGrid& grid, const geometry::Pose3& T_
   });
 }
 
+void appendOccupiedCentres(const map::MergedMap& map, std::vector<Eigen::Vector3d>& out_world) {
+  const double res = map.resolution();
+  map.forEachKnown([&](const map::VoxelKey& key, const map::VoxelValue& value) {
+    if (value.status == map::Occupancy::kOccupied) out_world.push_back(map::keyToCentre(key, res));
+  });
+}
+
 ReferenceReconstruction::ReferenceReconstruction(const map::LocalGrid& grid) : cloud_(grid.cloud()) {
   appendOccupiedCentres(grid, geometry::Pose3::Identity(), points_);
   index_ = std::make_unique<slam::NearestNeighbours>(points_);
@@ -61,12 +68,15 @@ Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3
   return out;
 }
 
-double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m) {
+double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m,
+                  std::vector<bool>* flags) {
+  if (flags != nullptr) flags->assign(points.size(), false);
   if (points.empty()) return 0.0;
   const double res = map.resolution();
   const int reach = static_cast<int>(std::ceil(radius_m / res));
   std::size_t covered = 0;
-  for (const Eigen::Vector3d& p : points) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
     const map::VoxelKey centre = map::pointToKey(p, 1.0 / res);
     bool hit = false;
     for (int dz = -reach; dz <= reach && !hit; ++dz)
@@ -77,6 +87,7 @@ double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>&
           hit = map.at(k).status == map::Occupancy::kOccupied;
         }
     if (hit) ++covered;
+    if (flags != nullptr) (*flags)[i] = hit;
   }
   return static_cast<double>(covered) / static_cast<double>(points.size());
 }

@@ -23,6 +23,9 @@ namespace vog::bench {
 void appendOccupiedCentres(const map::LocalGrid& grid, const geometry::Pose3& T_world_grid,
                            std::vector<Eigen::Vector3d>& out_world);
 
+// Appends the centres of the occupied voxels of a merged map (world frame).
+void appendOccupiedCentres(const map::MergedMap& map, std::vector<Eigen::Vector3d>& out_world);
+
 // The reference: occupied voxel centres (for distances) and the grid's downsampled cloud with
 // normals (the ICP target), both in the world frame.
 class ReferenceReconstruction {
@@ -51,7 +54,9 @@ struct ReconstructionError {
 Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3d>& estimate_world,
                                                 const ReferenceReconstruction& reference);
 
-// Coverage: the share of `points` (world frame) within `radius_m` of an occupied voxel of `map`.
-double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m);
+// Coverage: the share of `points` (world frame) within `radius_m` of an occupied voxel of `map`;
+// `flags`, when given, receives one covered flag per point.
+double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m,
+                  std::vector<bool>* flags = nullptr);
 
 }  // namespace vog::bench
