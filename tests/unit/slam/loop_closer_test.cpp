@@ -72,6 +72,30 @@ TEST_P(LoopCloserTest, RecoversTheRelativePoseOfARevisit) {
 INSTANTIATE_TEST_SUITE_P(Modes, LoopCloserTest,
                          ::testing::Values(LoopClosureMode::kPointToPoint2d, LoopClosureMode::kDegenerate));
 
+// A registration may turn the prior by at most max_yaw_disagreement_rad: the same revisit, its prior
+// 1 deg off in yaw, is accepted with a 1.5 deg bound and refused with 0.5 deg, the reason counted.
+TEST(LoopCloser, ARegistrationThatTurnsThePriorTooMuchIsRefused) {
+  const auto orbit = test::orbitTrajectory(80, 5.5, -2.0);
+  const geometry::Pose3 T_err = geometry::poseFromXyzRpy(0.1, -0.1, 0.0, 0.0, 0.0, deg2rad(1.0));
+  const std::vector<LoopSubmap> submaps = {
+      {0, gridOf(orbit, 1), orbit.front(), 0},
+      {5, gridOf(orbit, 2), orbit.front() * T_err, 200'000'000'000},
+  };
+  for (const double bound_deg : {1.5, 0.5}) {
+    LoopCloserConfig c;
+    c.point_to_plane.max_correspondence_distance_m = 0.5;
+    c.max_yaw_disagreement_rad = deg2rad(bound_deg);
+    auto closer = LoopCloser::create(c);
+    ASSERT_TRUE(closer.ok());
+    auto out = closer->closeLoops(submaps, 1);
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    EXPECT_EQ(out->stats.tried, 1);
+    const bool accepted = bound_deg > 1.0;
+    EXPECT_EQ(out->stats.accepted, accepted ? 1 : 0) << bound_deg << " deg";
+    EXPECT_EQ(out->stats.rejected_by_reason.count("yaw_disagreement"), accepted ? 0U : 1U) << bound_deg << " deg";
+  }
+}
+
 TEST(LoopCloser, ConsecutiveAndOppositeViewsAreNotTried) {
   const auto orbit = test::orbitTrajectory(40, 5.5, -2.0);
   const auto grid = gridOf(orbit, 1);
