@@ -27,8 +27,6 @@ using namespace vog;
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-constexpr const char* kSecret = "bench-operator-secret-0123";
-
 std::int64_t nowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
 }
@@ -129,7 +127,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
 
   asio::io_context io;
   api::ApiServerConfig config;
-  config.dispatch.operator_secret = kSecret;
+  config.dispatch.operator_secret = vog::bench::kOperatorSecret;
   config.max_clients = static_cast<std::size_t>(observers) + 8;
   auto server = api::ApiServer::create(io, backend, config);
   if (!server) {
@@ -184,7 +182,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   std::atomic<int> commands{0};
   threads.emplace_back([&] {
     auto c = client::ApiClient::connect("127.0.0.1", *port);
-    if (!c || !(*c)->authenticate(kSecret).ok()) {
+    if (!c || !(*c)->authenticate(vog::bench::kOperatorSecret).ok()) {
       ++failures;
       ++ready;
       return;

@@ -1,5 +1,5 @@
 #pragma once
-// Command-line parsing of a vog-bench subcommand with CLI11.
+// What the vog-bench subcommands share: command-line parsing with CLI11, the API benches' secret.
 
 #include <CLI/CLI.hpp>
 
@@ -8,6 +8,9 @@
 #include <vector>
 
 namespace vog::bench {
+
+// The operator secret the API and daemon benches configure their server with and authenticate with.
+inline constexpr const char* kOperatorSecret = "bench-operator-secret-0123";
 
 // Parses the arguments after the subcommand name. Returns the exit code when parsing ends the run
 // (--help, or an error CLI11 has printed), nullopt to go on. CLI11 takes a vector last-first.

@@ -26,8 +26,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-constexpr const char* kSecret = "bench-operator-secret-0123";
-
 std::int64_t unixNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
@@ -84,7 +82,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   char tmpl[] = "/tmp/vog-bench-daemon-XXXXXX";
   if (::mkdtemp(tmpl) == nullptr) return fail("cannot create a temporary folder");
   const fs::path dir = tmpl;
-  std::ofstream(dir / "secret") << kSecret << "\n";
+  std::ofstream(dir / "secret") << vog::bench::kOperatorSecret << "\n";
   fs::permissions(dir / "secret", fs::perms::owner_read | fs::perms::owner_write);
   std::ofstream(dir / "vogd.yaml") << "source: sim\nsim:\n  scene: " << fs::absolute(scene).string()
                                    << "\n  seed: 1\n  speedup: " << speedup
@@ -139,7 +137,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   vog::api::MapMirror mirror;
   auto op = vog::client::ApiClient::connect("127.0.0.1", port);
   if (!op) return fail("operator: " + op.error().message);
-  if (auto r = (*op)->authenticate(kSecret); !r) return fail("operator authentication: " + r.error().message);
+  if (auto r = (*op)->authenticate(vog::bench::kOperatorSecret); !r) return fail("operator authentication: " + r.error().message);
   std::vector<ProcSample> samples;
   const auto t0 = Clock::now();
   int tick = 0;

@@ -547,7 +547,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       return queue.T_true_by_stamp.at(pipeline.submaps()[static_cast<std::size_t>(index)].first_stamp_ns);
     };
     const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
-    const slam::ClosureError e = slam::closureError(lc, T_true, 0.2, vog::geometry::deg2rad(2.0));
+    const slam::ClosureError e = vog::bench::judgeClosure(lc, T_true);
     closures_wrong += e.wrong ? 1 : 0;
     closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
   }

@@ -1,5 +1,6 @@
 #include "reconstruction_eval.hpp"
 
+#include "vog/geometry/sonar.hpp"
 #include "vog/map/voxel_key.hpp"
 #include "vog/slam/icp.hpp"
 
@@ -90,6 +91,10 @@ double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>&
     if (flags != nullptr) (*flags)[i] = hit;
   }
   return static_cast<double>(covered) / static_cast<double>(points.size());
+}
+
+slam::ClosureError judgeClosure(const slam::LoopClosure& closure, const geometry::Pose3& T_from_to_true) {
+  return slam::closureError(closure, T_from_to_true, 0.2, geometry::deg2rad(2.0));
 }
 
 }  // namespace vog::bench

@@ -10,6 +10,7 @@
 #include "vog/geometry/result.hpp"
 #include "vog/map/local_grid.hpp"
 #include "vog/map/merged_map.hpp"
+#include "vog/slam/loop_closer.hpp"
 #include "vog/slam/nearest_neighbours.hpp"
 
 #include <Eigen/Core>
@@ -58,5 +59,9 @@ Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3
 // `flags`, when given, receives one covered flag per point.
 double coverageOf(const map::MergedMap& map, const std::vector<Eigen::Vector3d>& points, double radius_m,
                   std::vector<bool>* flags = nullptr);
+
+// A loop closure judged against the true relative pose of its submaps: wrong when, within the
+// directions it constrains, it is off by more than 0.2 m or 2 deg (slam::closureError).
+slam::ClosureError judgeClosure(const slam::LoopClosure& closure, const geometry::Pose3& T_from_to_true);
 
 }  // namespace vog::bench

@@ -8,7 +8,7 @@
 // with the reconstruction of the same scans at their ground-truth poses: RMSE of nearest-point
 // distances after a rigid ICP alignment (as the thesis) and unaligned. A closure is wrong when its
 // relative pose, within the directions it constrains, is off the ground truth by more than 0.2 m or
-// 2 deg (slam::closureError). Deterministic per seed.
+// 2 deg (bench::judgeClosure). Deterministic per seed.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
@@ -119,7 +119,7 @@ vog::Result<MethodResult> runMethod(const RecordedRun& run, slam::MappingPipelin
   };
   for (const slam::LoopClosure& lc : pipeline.closures()) {
     const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
-    if (slam::closureError(lc, T_true, 0.2, vog::geometry::deg2rad(2.0)).wrong) ++out.wrong;
+    if (vog::bench::judgeClosure(lc, T_true).wrong) ++out.wrong;
   }
 
   std::vector<Eigen::Vector3d> estimate;

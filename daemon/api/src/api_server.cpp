@@ -23,9 +23,9 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kWriteBatchBytes = 256 * 1024;
 constexpr std::size_t kReadChunkBytes = 64 * 1024;
 
-class Session;
-
 }  // namespace
+
+using Session = ApiServer::Session;
 
 struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   Core(asio::io_context& io_in, ApiBackend& backend, ApiServerConfig config_in, ApiLogger* logger_in,
@@ -69,15 +69,13 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
       n_drops{0}, n_waypoint_drops{0}, n_waypoints{0}, n_requests{0}, n_tls_failures{0};
 };
 
-namespace {
-
 // One client connection.
 // Lifecycle: [handshaking (TLS only; at most tls.handshake_timeout)] -> open (reading requests,
 // writing replies and streams) -> closing (an Error is queued;
 // no more reads; only queued responses are flushed, for at most close_timeout) -> closed (socket
 // closed, removed from Core::sessions). Invariants: at most one async write and one async read in
 // flight; queues are bounded as the server header describes. io thread only.
-class Session : public std::enable_shared_from_this<Session> {
+class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Session> {
  public:
   Session(std::shared_ptr<ApiServer::Core> core, tcp::socket socket, std::uint64_t id, bool refuse)
       : core_(std::move(core)),
@@ -411,8 +409,6 @@ class Session : public std::enable_shared_from_this<Session> {
   std::uint64_t dropped_poses_ = 0;
   std::uint64_t dropped_status_ = 0;
 };
-
-}  // namespace
 
 std::size_t ApiServer::Core::activeClients() const {
   std::size_t n = 0;

@@ -27,8 +27,6 @@ std::optional<std::uint32_t> validFrame(std::span<const std::uint8_t> b, std::si
   return len;
 }
 
-std::string errnoText() { return std::strerror(errno); }
-
 Result<std::vector<std::uint8_t>> readAll(int fd, const std::filesystem::path& path) {
   struct stat st {};
   if (::fstat(fd, &st) != 0) return Error{"cannot stat " + path.string() + ": " + errnoText()};

@@ -14,8 +14,6 @@
 namespace vog::mission {
 namespace {
 
-std::string errnoText() { return std::strerror(errno); }
-
 // Size and CRC-32C of a file, streamed.
 Result<StoredSubmapFile> checksum(int fd, const std::filesystem::path& path) {
   StoredSubmapFile out;

@@ -3,25 +3,22 @@
 #include <nanoflann.hpp>
 
 namespace vog::slam {
-namespace {
 
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3d>& points;
-  std::size_t kdtree_get_point_count() const { return points.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i](static_cast<Eigen::Index>(dim)); }
-  template <class Box>
-  bool kdtree_get_bbox(Box& /*box*/) const {
-    return false;
-  }
-};
-
-using KdTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
-                                        std::size_t>;
-
-}  // namespace
-
+// The k-d tree over the points, with its nanoflann adaptor.
 struct NearestNeighbours::Impl {
+  struct CloudAdaptor {
+    const std::vector<Eigen::Vector3d>& points;
+    std::size_t kdtree_get_point_count() const { return points.size(); }
+    double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i](static_cast<Eigen::Index>(dim)); }
+    template <class Box>
+    bool kdtree_get_bbox(Box& /*box*/) const {
+      return false;
+    }
+  };
+  using KdTree =
+      nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
+                                          std::size_t>;
+
   explicit Impl(const std::vector<Eigen::Vector3d>& points)
       : adaptor{points}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {}
   CloudAdaptor adaptor;

@@ -13,11 +13,6 @@
 #include "supervisor.hpp"
 
 namespace vog::io {
-namespace {
-
-std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
-
-}  // namespace
 
 Status CanConfig::validate(const std::string& prefix) const {
   if (interface.empty() == unix_seqpacket.empty()) {

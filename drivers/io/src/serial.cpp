@@ -19,8 +19,6 @@ constexpr std::array<unsigned, 18> kStandardBauds = {300,    600,    1200,   240
                                                       19200,  38400,  57600,  115200, 230400, 460800,
                                                       500000, 576000, 921600, 1000000, 1500000, 2000000};
 
-std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
-
 }  // namespace
 
 Status SerialConfig::validate(const std::string& prefix) const {

@@ -9,9 +9,6 @@
 #include <cstring>
 
 namespace vog::mock {
-namespace {
-std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
-}  // namespace
 
 PtyDevice::PtyDevice(std::filesystem::path link_path, HostBytesHandler on_host)
     : link_path_(std::move(link_path)), on_host_(std::move(on_host)) {}

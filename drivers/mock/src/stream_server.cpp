@@ -10,9 +10,6 @@
 #include <cstring>
 
 namespace vog::mock {
-namespace {
-std::string errnoText(const std::string& what) { return what + ": " + std::strerror(errno); }
-}  // namespace
 
 StreamServer::StreamServer(StreamServerConfig config, ClientHandler on_client)
     : config_(std::move(config)), on_client_(std::move(on_client)) {}

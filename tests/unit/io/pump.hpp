@@ -1,11 +1,15 @@
 #pragma once
-// Test helper: runs an io_context until a condition holds or a deadline passes (no sleep-based races).
+// Helpers of the io tests: run an io_context until a condition holds or a deadline passes (no
+// sleep-based races), deterministic stamps and payloads.
 
 #include <asio.hpp>
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
+#include <random>
 #include <thread>
+#include <vector>
 
 namespace vog::test {
 
@@ -34,5 +38,13 @@ struct SteppingClock {
     return t;
   }
 };
+
+// n bytes drawn from a generator seeded with `seed`.
+inline std::vector<std::uint8_t> randomBytes(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::uint8_t> out(n);
+  for (auto& b : out) b = static_cast<std::uint8_t>(rng());
+  return out;
+}
 
 }  // namespace vog::test

@@ -20,13 +20,7 @@ namespace vog::io {
 namespace {
 
 using test::pumpUntil;
-
-std::vector<std::uint8_t> randomBytes(std::size_t n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::vector<std::uint8_t> out(n);
-  for (auto& b : out) b = static_cast<std::uint8_t>(rng());
-  return out;
-}
+using test::randomBytes;
 
 struct SerialFixture : ::testing::Test {
   test::TempDir dir{"vog-serial"};

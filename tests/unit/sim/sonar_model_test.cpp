@@ -1,6 +1,7 @@
 #include "vog/sim/sonar_model.hpp"
 
 #include "test_support.hpp"
+#include "world_from_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,13 +10,9 @@
 namespace vog::sim {
 namespace {
 
-std::unique_ptr<World> worldFrom(const std::string& objects) {
-  const std::string text = "name: t\nbounds: {min: [-20, -20, -20], max: [20, 20, 20]}\nstart: {xyz: [0, 0, 0]}\nobjects:\n" + objects;
-  auto s = parseScene(text, "t.yaml", ".");
-  EXPECT_TRUE(s.ok()) << s.error().message;
-  auto w = World::create(*s);
-  EXPECT_TRUE(w.ok()) << w.error().message;
-  return std::move(w).value();
+// Objects up to the sonar's range away: a scene 40 m wide.
+std::unique_ptr<World> wideWorldFrom(const std::string& objects) {
+  return worldFrom(objects, "{min: [-20, -20, -20], max: [20, 20, 20]}");
 }
 
 SonarModel makeModel(const World& w, double sigma, std::uint64_t seed = 1) {
@@ -29,7 +26,7 @@ SonarModel makeModel(const World& w, double sigma, std::uint64_t seed = 1) {
 TEST(SonarModel, WallAheadGivesTheAnalyticRangePerBeam) {
   // Wall facing the vehicle at x = 4 (normal along x). The fan is vertical, so beam i at azimuth a
   // meets it at 4 / cos(a) on its centre sub-ray, the nearest of the beam's sub-rays.
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [4, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
+  const auto w = wideWorldFrom("  - {type: plane, pose: {xyz: [4, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
   SonarModel m = makeModel(*w, 0.0);
   const SonarPing p = m.ping(geometry::Pose3::Identity(), 123, false);
   EXPECT_EQ(p.scan.stamp_ns, 123);
@@ -47,7 +44,7 @@ TEST(SonarModel, WallAheadGivesTheAnalyticRangePerBeam) {
 TEST(SonarModel, BeamRangeIsTheMinimumOverItsSubRays) {
   // A wall turned 40 deg about the vertical: the sub-rays of a beam (spread across the 1 deg beam
   // thickness, which is horizontal once mounted) meet it at different ranges.
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [5, 0, 0], rpy_deg: [0, 90, 40]}, size: [30, 30]}\n");
+  const auto w = wideWorldFrom("  - {type: plane, pose: {xyz: [5, 0, 0], rpy_deg: [0, 90, 40]}, size: [30, 30]}\n");
   SonarModel m = makeModel(*w, 0.0);
   const geometry::Pose3 T = geometry::poseFromXyzRpy(0.3, -0.2, 0.1, 0, 0, 0.2);
   const SonarPing p = m.ping(T, 0, false);
@@ -70,11 +67,11 @@ TEST(SonarModel, BeamRangeIsTheMinimumOverItsSubRays) {
 }
 
 TEST(SonarModel, NoReturnBeyondMaxRangeAndNoiseHasTheConfiguredSigma) {
-  const auto far = worldFrom("  - {type: plane, pose: {xyz: [11.5, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
+  const auto far = wideWorldFrom("  - {type: plane, pose: {xyz: [11.5, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
   SonarModel mf = makeModel(*far, 0.0);
   for (const float r : mf.ping(geometry::Pose3::Identity(), 0, false).scan.range_m) EXPECT_EQ(r, geometry::RangeScan::kNoReturn);
 
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [4, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
+  const auto w = wideWorldFrom("  - {type: plane, pose: {xyz: [4, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
   SonarModel m = makeModel(*w, 0.01, 42);
   double sum = 0, sum2 = 0;
   int n = 0;
@@ -93,7 +90,7 @@ TEST(SonarModel, NoReturnBeyondMaxRangeAndNoiseHasTheConfiguredSigma) {
 }
 
 TEST(SonarModel, DeterministicPerSeed) {
-  const auto w = worldFrom("  - {type: cylinder, pose: {xyz: [3, 0, 0]}, radius: 0.5, length: 4}\n"
+  const auto w = wideWorldFrom("  - {type: cylinder, pose: {xyz: [3, 0, 0]}, radius: 0.5, length: 4}\n"
                            "  - {type: plane, pose: {xyz: [0, 0, -3]}, size: [30, 30]}\n");
   SonarModel a = makeModel(*w, 0.01, 5), b = makeModel(*w, 0.01, 5), c = makeModel(*w, 0.01, 6);
   const geometry::Pose3 T = geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0.1);
@@ -108,7 +105,7 @@ TEST(SonarModel, DeterministicPerSeed) {
 
 TEST(SonarModel, FrameLayoutPutsTheEchoAtTheRangeSample) {
   // The top beams pass over the piling's top into open water: no return.
-  const auto w = worldFrom("  - {type: cylinder, pose: {xyz: [3, 0, -1.5]}, radius: 0.5, length: 2}\n"
+  const auto w = wideWorldFrom("  - {type: cylinder, pose: {xyz: [3, 0, -1.5]}, radius: 0.5, length: 2}\n"
                            "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [30, 30]}\n");
   SonarModel m = makeModel(*w, 0.01, 3);
   const geometry::Pose3 T = geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0.05);
@@ -149,7 +146,7 @@ TEST(SonarModel, FrameLayoutPutsTheEchoAtTheRangeSample) {
 }
 
 TEST(SonarModel, BadConfigIsRejected) {
-  const auto w = worldFrom("  []\n");
+  const auto w = wideWorldFrom("  []\n");
   SonarModelConfig cfg;
   cfg.sub_rays_per_beam = 0;
   auto m = SonarModel::create(*w, cfg, 1);

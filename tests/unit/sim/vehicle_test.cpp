@@ -1,18 +1,11 @@
 #include "vog/sim/vehicle.hpp"
 
+#include "world_from_text.hpp"
+
 #include <gtest/gtest.h>
 
 namespace vog::sim {
 namespace {
-
-std::unique_ptr<World> worldFrom(const std::string& objects) {
-  const std::string text = "name: t\nbounds: {min: [-10, -10, -10], max: [10, 10, 10]}\nstart: {xyz: [0, 0, 0]}\nobjects:\n" + objects;
-  auto s = parseScene(text, "t.yaml", ".");
-  EXPECT_TRUE(s.ok()) << s.error().message;
-  auto w = World::create(*s);
-  EXPECT_TRUE(w.ok()) << w.error().message;
-  return std::move(w).value();
-}
 
 constexpr std::int64_t kDtNs = 10'000'000;  // 100 Hz
 

@@ -2,6 +2,7 @@
 #include "vog/sim/world.hpp"
 
 #include "test_support.hpp"
+#include "world_from_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,16 +11,6 @@
 
 namespace vog::sim {
 namespace {
-
-std::unique_ptr<World> worldFrom(const std::string& objects, const std::string& bounds = "{min: [-10, -10, -10], max: [10, 10, 10]}",
-                                 const std::filesystem::path& dir = ".") {
-  const std::string text = "name: t\nbounds: " + bounds + "\nstart: {xyz: [0, 0, 0]}\nobjects:\n" + objects;
-  auto s = parseScene(text, "t.yaml", dir);
-  EXPECT_TRUE(s.ok()) << s.error().message;
-  auto w = World::create(*s);
-  EXPECT_TRUE(w.ok()) << w.error().message;
-  return std::move(w).value();
-}
 
 Eigen::Vector3d randomUnit(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);

@@ -95,7 +95,9 @@ class ApiServer {
 
   ApiServerStats stats() const;
 
+  // The shared state of the io thread, and one client connection (both defined in the source).
   struct Core;
+  class Session;
 
  private:
   explicit ApiServer(std::shared_ptr<Core> core);

@@ -3,6 +3,8 @@
 // was wrong. Bugs abort; bad input returns an Error.
 
 #include <cassert>
+#include <cerrno>
+#include <cstring>
 #include <string>
 #include <utility>
 #include <variant>
@@ -51,5 +53,9 @@ class [[nodiscard]] Status {
   Error error_;
   bool failed_ = false;
 };
+
+// The text of errno, for the error of the system call that just failed: alone, or after "what: ".
+inline std::string errnoText() { return std::strerror(errno); }
+inline std::string errnoText(const std::string& what) { return what + ": " + errnoText(); }
 
 }  // namespace vog
