@@ -110,7 +110,8 @@ Status LocalGrid::insertRays(const Eigen::Vector3d& origin_grid, std::span<const
   // One scan updates each voxel at most once, occupied winning over free (OctoMap's computeUpdate).
   octomap::KeySet free_keys;
   octomap::KeySet occupied_keys;
-  octomap::KeyRay ray;
+  if (!ray_) ray_ = std::make_unique<octomap::KeyRay>();
+  octomap::KeyRay& ray = *ray_;
   const octomap::point3d origin = toOcto(origin_grid);
   for (const auto& b : beams) {
     Eigen::Vector3d end = b.end_grid;
@@ -147,6 +148,7 @@ void LocalGrid::finalize() {
   cacheLeaves();
   computeKnownBox();
   computeCloud();
+  ray_.reset();
   finalized_ = true;
 }
 
@@ -256,6 +258,14 @@ void LocalGrid::computeCloud() {
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(config_.normal_neighbours), cloud_.size());
   std::vector<std::uint32_t> idx(k);
   std::vector<double> dist(k);
+  // Normals are oriented towards the nearest sensor origin (the surface was seen from that side); a
+  // grid read from disk has none and orients towards its base.
+  CloudAdaptor origins_adaptor{sensor_origins_};
+  std::optional<KdTree> origins;
+  if (!sensor_origins_.empty()) {
+    origins.emplace(3, origins_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    origins->buildIndex();
+  }
   cloud_.normals.resize(cloud_.size());
   for (std::size_t i = 0; i < cloud_.size(); ++i) {
     const Eigen::Vector3d& p = cloud_.points[i];
@@ -270,15 +280,12 @@ void LocalGrid::computeCloud() {
     }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     Eigen::Vector3d normal = eig.eigenvectors().col(0);
-    // Orient towards the nearest sensor origin (the surface was seen from that side).
     Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& o : sensor_origins_) {
-      const double d2 = (o - p).squaredNorm();
-      if (d2 < best) {
-        best = d2;
-        viewpoint = o;
-      }
+    if (origins) {
+      std::uint32_t nearest = 0;
+      double d2 = 0.0;
+      origins->knnSearch(p.data(), 1, &nearest, &d2);
+      viewpoint = sensor_origins_[nearest];
     }
     if (normal.dot(viewpoint - p) < 0.0) normal = -normal;
     cloud_.normals[i] = normal.normalized();

@@ -5,9 +5,6 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
-
 namespace vog::mock {
 
 PtyDevice::PtyDevice(std::filesystem::path link_path, HostBytesHandler on_host)

@@ -5,9 +5,6 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
-
 #include "vog/sonar/sonar_udp.hpp"
 
 namespace vog::mock {
@@ -70,7 +67,7 @@ SonarMock::~SonarMock() { disappear(); }
 
 Status SonarMock::open() {
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd_ < 0) return Error{std::string("sonar mock socket: ") + std::strerror(errno)};
+  if (fd_ < 0) return Error{errnoText("sonar mock socket")};
   return Status::success();
 }
 
@@ -90,7 +87,7 @@ Status SonarMock::sendDatagram(const std::vector<std::uint8_t>& d) {
   addr.sin_port = htons(port_);
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   const ssize_t n = ::sendto(fd_, d.data(), d.size(), 0, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr));
-  if (n != static_cast<ssize_t>(d.size())) return Error{std::string("sonar mock sendto: ") + std::strerror(errno)};
+  if (n != static_cast<ssize_t>(d.size())) return Error{errnoText("sonar mock sendto")};
   ++datagrams_sent_;
   return Status::success();
 }

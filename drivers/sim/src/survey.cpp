@@ -35,7 +35,7 @@ class CsvFile {
   CsvFile& operator=(const CsvFile&) = delete;
   std::FILE* get() { return f_; }
   Status close() {
-    if (f_ == nullptr) return Error{"cannot write " + path_.string() + ": " + std::strerror(errno)};
+    if (f_ == nullptr) return Error{"cannot write " + path_.string() + ": " + errnoText()};
     const bool bad = std::ferror(f_) != 0;
     const int rc = std::fclose(f_);
     f_ = nullptr;

@@ -116,10 +116,10 @@ Result<std::unique_ptr<ControlServer>> ControlServer::create(const std::filesyst
     return Error{"control socket path must be 1.." + std::to_string(sizeof(addr.sun_path) - 1) + " bytes, got '" + p + "'"};
   std::memcpy(addr.sun_path, p.c_str(), p.size() + 1);
   const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  if (fd < 0) return Error{std::string("control socket: ") + std::strerror(errno)};
+  if (fd < 0) return Error{errnoText("control socket")};
   ::unlink(p.c_str());  // a stale socket of an earlier run
   if (::bind(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0 || ::listen(fd, 8) != 0) {
-    const std::string msg = "control socket " + p + ": " + std::strerror(errno);
+    const std::string msg = "control socket " + p + ": " + errnoText();
     ::close(fd);
     return Error{msg};
   }

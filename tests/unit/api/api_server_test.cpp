@@ -3,6 +3,7 @@
 #include "vog/api/framing.hpp"
 #include "vog/client/api_client.hpp"
 
+#include "api_test_support.hpp"
 #include "fake_backend.hpp"
 #include "test_support.hpp"
 
@@ -20,12 +21,12 @@ namespace {
 
 using namespace std::chrono_literals;
 using client::ApiClient;
-
-constexpr const char* kSecret = "operator-secret-0123456789";
+using test::expectMirrorEquals;
+using test::kOperatorSecret;
 
 ApiServerConfig defaultConfig() {
   ApiServerConfig c;
-  c.dispatch.operator_secret = kSecret;
+  c.dispatch.operator_secret = kOperatorSecret;
   c.dispatch.server_name = "vogd-test";
   c.dispatch.max_frame_bytes = 1u << 20;
   c.close_timeout = 500ms;
@@ -76,21 +77,6 @@ class ApiServerTest : public ::testing::Test {
   std::uint16_t port_ = 0;
   std::thread thread_;
 };
-
-void expectMirrorEquals(const MapMirror& mirror, const map::MergedMap& merged) {
-  std::size_t n = 0;
-  merged.forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
-    const map::VoxelValue m = mirror.at(k);
-    ASSERT_EQ(m.status, v.status) << k.transpose();
-    // The wire carries float32 log-odds (map.proto).
-    ASSERT_EQ(static_cast<float>(m.log_odds), static_cast<float>(v.log_odds)) << k.transpose();
-    ++n;
-  });
-  EXPECT_GT(n, 1000u);
-  EXPECT_EQ(mirror.blockCount(), merged.blockCount());
-  EXPECT_EQ(mirror.version(), merged.version());
-  EXPECT_EQ(mirror.resolution(), merged.resolution());
-}
 
 TEST_F(ApiServerTest, EveryReadCallRoundTrips) {
   start();
@@ -156,7 +142,7 @@ TEST_F(ApiServerTest, OperatorCommandsDriveTheMissionAfterAuthentication) {
   start();
   auto c = connect();
   ASSERT_TRUE(c);
-  ASSERT_EQ(c->authenticate(kSecret).value(), Role::kOperator);
+  ASSERT_EQ(c->authenticate(kOperatorSecret).value(), Role::kOperator);
 
   MissionCommand set_box;
   set_box.kind = MissionCommand::Kind::kSetBox;
@@ -289,12 +275,12 @@ TEST_F(ApiServerTest, AuthenticationSucceedsOnlyWithTheSecretAndEachNonceOnce) {
   const std::string client_nonce(32, '\x5a');
   v1::Envelope answer;
   answer.mutable_challenge_response()->set_client_nonce(client_nonce);
-  answer.mutable_challenge_response()->set_mac(std::string(asBytes(clientMac(kSecret, server_nonce, client_nonce))));
+  answer.mutable_challenge_response()->set_mac(std::string(asBytes(clientMac(kOperatorSecret, server_nonce, client_nonce))));
   (void)right->send(answer).value();
   const v1::Envelope ok = right->receive(5s).value();
   ASSERT_TRUE(ok.has_auth_result());
   EXPECT_EQ(ok.auth_result().role(), v1::ROLE_OPERATOR);
-  EXPECT_TRUE(macEquals(ok.auth_result().server_proof(), serverProof(kSecret, server_nonce, client_nonce)));
+  EXPECT_TRUE(macEquals(ok.auth_result().server_proof(), serverProof(kOperatorSecret, server_nonce, client_nonce)));
   (void)right->send(answer).value();
   const v1::Envelope replay = right->receive(5s).value();
   ASSERT_TRUE(replay.has_error());

@@ -1,5 +1,6 @@
 #include "vog/api/map_delta.hpp"
 
+#include "api_test_support.hpp"
 #include "map_fixtures.hpp"
 #include "vog/v1/map.pb.h"
 
@@ -8,6 +9,8 @@
 namespace vog::api {
 namespace {
 
+using test::expectMirrorEquals;
+
 // Sends the delta through its wire form, as the API does.
 v1::MapDelta overTheWire(const v1::MapDelta& delta) {
   std::string bytes;
@@ -15,19 +18,6 @@ v1::MapDelta overTheWire(const v1::MapDelta& delta) {
   v1::MapDelta received;
   EXPECT_TRUE(received.ParseFromString(bytes));
   return received;
-}
-
-void expectMirrorEquals(const MapMirror& mirror, const map::MergedMap& merged) {
-  std::size_t n = 0;
-  merged.forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
-    const map::VoxelValue m = mirror.at(k);
-    ASSERT_EQ(m.status, v.status) << k.transpose();
-    ASSERT_NEAR(m.log_odds, v.log_odds, 1e-6);
-    ++n;
-  });
-  EXPECT_GT(n, 1000u);
-  EXPECT_EQ(mirror.blockCount(), merged.blockCount());
-  EXPECT_EQ(mirror.version(), merged.version());
 }
 
 TEST(MapDelta, AMirrorFollowsTheMapThroughDeltas) {

@@ -3,6 +3,7 @@
 #include "vog/api/api_server.hpp"
 #include "vog/client/api_client.hpp"
 
+#include "api_test_support.hpp"
 #include "fake_backend.hpp"
 #include "test_support.hpp"
 
@@ -21,8 +22,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using client::ApiClient;
-
-constexpr const char* kSecret = "operator-secret-0123456789";
+using test::kOperatorSecret;
 
 struct Certificate {
   std::filesystem::path certificate_file;
@@ -71,7 +71,7 @@ class TlsTest : public ::testing::Test {
 
   ApiServerConfig tlsConfig() const {
     ApiServerConfig c;
-    c.dispatch.operator_secret = kSecret;
+    c.dispatch.operator_secret = kOperatorSecret;
     c.tls.certificate_chain_file = server_cert_.certificate_file;
     c.tls.private_key_file = server_cert_.key_file;
     c.tls.handshake_timeout = 500ms;
@@ -121,7 +121,7 @@ TEST_F(TlsTest, ClientsThatVerifyTheServerTalkAndAuthenticateOverTls) {
     ASSERT_TRUE(c.ok()) << host << ": " << c.error().message;
     auto status = (*c)->status();
     ASSERT_TRUE(status.ok()) << status.error().message;
-    EXPECT_EQ((*c)->authenticate(kSecret).value(), Role::kOperator);
+    EXPECT_EQ((*c)->authenticate(kOperatorSecret).value(), Role::kOperator);
     auto config = (*c)->configText();
     ASSERT_TRUE(config.ok());
     EXPECT_EQ(*config, backend_.configText());

@@ -21,6 +21,7 @@
 #include <vector>
 
 namespace octomap {
+class KeyRay;
 class OcTree;
 }
 
@@ -108,6 +109,9 @@ class LocalGrid {
   std::size_t scan_count_ = 0;
   bool finalized_ = false;
   std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted
+  // insertRays()'s buffer of ray keys: OctoMap sizes it for 100,000 keys (600 kB), so it is made once
+  // per grid, not per scan, and dropped by finalize().
+  std::unique_ptr<octomap::KeyRay> ray_;
   std::vector<PackedLeaf> packed_leaves_;
   KeyBox known_keys_;
   geometry::PointCloud cloud_;
