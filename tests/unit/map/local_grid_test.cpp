@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <set>
 
@@ -145,6 +147,33 @@ TEST(LocalGrid, LeavesCoverExactlyTheKnownVoxels) {
   EXPECT_GT(voxels, 1000u);
   // And one voxel outside the known box is unknown.
   EXPECT_FALSE(grid->logOddsAt(grid->knownKeys().max + VoxelKey(1, 0, 0)).has_value());
+}
+
+TEST(LocalGrid, EveryNormalFacesTheNearestOfManySensorOrigins) {
+  // Two parallel walls 1 m apart, each hit by single rays from its own side (x = -2.5 and x = +2.5,
+  // 400 origins): every normal faces the origin nearest its point, found here by brute force.
+  auto grid = makeGrid();
+  std::vector<Eigen::Vector3d> origins;
+  for (int side = -1; side <= 1; side += 2)
+    for (int i = 0; i < 200; ++i) {
+      const double y = -2.0 + 0.2 * (i % 20);
+      const double z = -2.0 + 0.2 * (i / 20) + 0.013 * side;
+      const Eigen::Vector3d origin(2.5 * side, y + 0.007 * i, z);
+      const BeamEnd beam{Eigen::Vector3d(0.5 * side, y, z), true};
+      ASSERT_TRUE(grid->insertRays(origin, {&beam, 1}).ok());
+      origins.push_back(origin);
+    }
+  grid->finalize();
+  const auto& cloud = grid->cloud();
+  ASSERT_GT(cloud.size(), 50u);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d& p = cloud.points[i];
+    const Eigen::Vector3d nearest = *std::min_element(origins.begin(), origins.end(), [&](const auto& a, const auto& b) {
+      return (a - p).squaredNorm() < (b - p).squaredNorm();
+    });
+    EXPECT_GT(cloud.normals[i].dot(nearest - p), 0.0) << p.transpose();
+    EXPECT_GT(std::abs(cloud.normals[i].x()), 0.9) << p.transpose();  // the walls' normal is along x
+  }
 }
 
 TEST(LocalGrid, CloudLiesOnTheSurfaceWithNormalsTowardsTheSensor) {
