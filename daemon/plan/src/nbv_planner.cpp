@@ -114,10 +114,10 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   if (!current.p_world.allFinite() || !std::isfinite(current.yaw_rad))
     return Error{"plan: current pose " + describe(current.p_world) + " yaw " + std::to_string(current.yaw_rad) +
                  " is not finite"};
-  // A loop closure can move the estimate a little outside the box: within root_tolerance_m the tree
-  // grows from the nearest safe position inside it (below).
+  // A loop closure can move the estimate outside the box: within root_tolerance_m the tree grows from
+  // the nearest safe position inside it, within recovery_radius_m the vehicle moves back in (below).
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
-  if (box.exteriorDistance(current.p_world) > config_.root_tolerance_m)
+  if (box.exteriorDistance(current.p_world) > std::max(config_.root_tolerance_m, config_.recovery_radius_m))
     return Error{outsideBox("plan: current position", config_, current.p_world)};
   if (map.query(current.p_world).status == map::Occupancy::kOccupied)
     return Error{"plan: current position " + describe(current.p_world) + " is inside an obstacle (occupied voxel)"};
@@ -154,7 +154,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
       // around it, typically nearer a surface than the estimate had it. It is physically where it was a
       // moment ago, so it moves straight (keeping its heading) to the nearest safe voxel that its box
       // reaches without touching an occupied voxel.
-      if (const auto escape = grid_->nearestSafeClearOfOccupied(current.p_world, current.yaw_rad,
+      if (const auto escape = grid_->nearestSafeClearOfOccupied(map, current.p_world, current.yaw_rad,
                                                                config_.collision_box_m, config_.recovery_radius_m)) {
         return moveTo(*escape, "recovering: the current position " + describe(current.p_world) +
                                    " is not in the safe region; moving to " + describe(*escape));

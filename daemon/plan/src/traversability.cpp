@@ -317,7 +317,8 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafe(const Eigen::Vect
   return map::keyToCentre(keys.front().second, resolution_);
 }
 
-std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(const Eigen::Vector3d& p_world,
+std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(const MergedMap& snapshot,
+                                                                              const Eigen::Vector3d& p_world,
                                                                               double yaw_rad,
                                                                               const Eigen::Vector3d& box_m,
                                                                               double radius_m) const {
@@ -332,7 +333,8 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(co
   std::vector<Eigen::Vector3d> occupied_box;  // q - p in the box frame
   const int reach = static_cast<int>(std::ceil((radius_m + h.norm()) * inv_resolution_));
   forEachKeyWithin(map::pointToKey(p_world, inv_resolution_), reach, [&](const VoxelKey& k) {
-    if (status(k) != map::Occupancy::kOccupied) return;
+    const map::Occupancy s = grid_.contains(k) ? status(k) : snapshot.query(map::keyToCentre(k, resolution_)).status;
+    if (s != map::Occupancy::kOccupied) return;
     // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle (it
     // is physically there): they cannot be avoided and do not count.
     const Eigen::Vector3d q = R.transpose() * (map::keyToCentre(k, resolution_) - p_world);

@@ -488,6 +488,37 @@ TEST_F(PlannerMaps, FarFromTheSafeVoxelsTheVehicleRecoversInOneStraightMove) {
   EXPECT_NE(none.reason.find("recovery_radius_m"), std::string::npos) << none.reason;
 }
 
+TEST_F(PlannerMaps, AnEstimateMovedOutsideTheBoxMovesBackIn) {
+  // A loop closure moved the estimate 0.8 m south of the exploration box, into free space of the map
+  // (the box ends at y = -1.9, the known room at -3): farther out than root_tolerance_m, within
+  // recovery_radius_m. The plan is one straight move, keeping the heading, to a safe voxel inside the
+  // box; from there planning goes on. Farther out than recovery_radius_m is an error naming the box.
+  const auto map = full();
+  PlannerConfig c = roomConfig();
+  c.box_min_world_m.y() = -1.9;
+  const Waypoint home{{-3.0, 0.0, -1.75}, 0.0};
+  auto planner = NbvPlanner::create(c, home).value();
+  const Waypoint current{{-3.0, -2.7, -1.75}, 0.0};
+  ASSERT_GT(Eigen::AlignedBox3d(c.box_min_world_m, c.box_max_world_m).exteriorDistance(current.p_world),
+            c.root_tolerance_m);
+  const PlanResult r = planner->plan(map, current).value();
+  ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
+  EXPECT_NE(r.reason.find("recovering"), std::string::npos) << r.reason;
+  ASSERT_EQ(r.waypoints.size(), 1u);
+  const Waypoint& in = r.waypoints.front();
+  EXPECT_TRUE(planner->traversability()->isSafe(in.p_world));
+  EXPECT_TRUE(planner->traversability()->insideBox(in.p_world));
+  EXPECT_EQ(in.yaw_rad, current.yaw_rad);
+  EXPECT_LE((in.p_world - current.p_world).norm(), c.recovery_radius_m);
+  EXPECT_FALSE(test_fixtures::sweepTouchesNewOccupied(*map, current.p_world, in.p_world, c.collision_box_m));
+  EXPECT_TRUE(planner->plan(map, in).ok());
+
+  const Waypoint far{{-3.0, c.box_min_world_m.y() - c.recovery_radius_m - 0.1, -1.75}, 0.0};
+  const auto err = planner->plan(map, far);
+  ASSERT_FALSE(err.ok());
+  EXPECT_NE(err.error().message.find("outside the exploration box"), std::string::npos) << err.error().message;
+}
+
 TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDropped) {
   // In the known room the vehicle at (-2, 0) heading east was stopped on its way to (0, 0) (by
   // something the map does not show): the next plan backs it off 0.3 m the way it came, keeping its

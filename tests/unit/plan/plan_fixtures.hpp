@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <random>
 
@@ -130,6 +131,33 @@ inline bool bruteForceEdgeFree(const map::MergedMap& map, const Eigen::Vector3d&
           if (map.at(k).status != map::Occupancy::kFree) return false;
   }
   return true;
+}
+
+// Brute force for the recovery move: does the box (full sides box_m, axis-aligned) translated from a
+// to b overlap an occupied voxel that it does not already overlap at a? Steps of res / 8.
+inline bool sweepTouchesNewOccupied(const map::MergedMap& map, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& box_m) {
+  const double res = map.resolution();
+  const Eigen::Vector3d h = 0.5 * box_m;
+  auto overlapped = [&](const Eigen::Vector3d& c, const std::function<bool(const map::VoxelKey&)>& f) {
+    const map::VoxelKey lo = map::pointToKey(c - h, 1.0 / res), hi = map::pointToKey(c + h, 1.0 / res);
+    map::VoxelKey k;
+    for (k.z() = lo.z(); k.z() <= hi.z(); ++k.z())
+      for (k.y() = lo.y(); k.y() <= hi.y(); ++k.y())
+        for (k.x() = lo.x(); k.x() <= hi.x(); ++k.x())
+          if (map.at(k).status == map::Occupancy::kOccupied && f(k)) return true;
+    return false;
+  };
+  auto at_start = [&](const map::VoxelKey& k) {
+    const Eigen::Vector3d d = (map::keyToCentre(k, res) - a).cwiseAbs();
+    return ((d - h).array() < 0.5 * res).all();
+  };
+  const int steps = static_cast<int>(std::ceil((b - a).norm() / (res / 8))) + 1;
+  for (int i = 0; i <= steps; ++i) {
+    const Eigen::Vector3d c = a + (b - a) * (static_cast<double>(i) / steps);
+    if (overlapped(c, [&](const map::VoxelKey& k) { return !at_start(k); })) return true;
+  }
+  return false;
 }
 
 }  // namespace vog::plan::test_fixtures

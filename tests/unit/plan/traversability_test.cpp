@@ -263,33 +263,6 @@ TEST_F(PierTraversability, AssumedFreeSphereFreesUnknownOnly) {
   EXPECT_FALSE(TraversabilityGrid::build(*map, kPierBox, kCollisionBox, {centre, -1.0}).ok());
 }
 
-// Brute force for the recovery move: does the box (full sides box_m, axis-aligned) translated from a
-// to b overlap an occupied voxel that it does not already overlap at a? Steps of res / 8.
-bool sweepTouchesNewOccupied(const map::MergedMap& map, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                             const Eigen::Vector3d& box_m) {
-  const double res = map.resolution();
-  const Eigen::Vector3d h = 0.5 * box_m;
-  auto overlapped = [&](const Eigen::Vector3d& c, const std::function<bool(const map::VoxelKey&)>& f) {
-    const map::VoxelKey lo = map::pointToKey(c - h, 1.0 / res), hi = map::pointToKey(c + h, 1.0 / res);
-    map::VoxelKey k;
-    for (k.z() = lo.z(); k.z() <= hi.z(); ++k.z())
-      for (k.y() = lo.y(); k.y() <= hi.y(); ++k.y())
-        for (k.x() = lo.x(); k.x() <= hi.x(); ++k.x())
-          if (map.at(k).status == map::Occupancy::kOccupied && f(k)) return true;
-    return false;
-  };
-  auto at_start = [&](const map::VoxelKey& k) {
-    const Eigen::Vector3d d = (map::keyToCentre(k, res) - a).cwiseAbs();
-    return ((d - h).array() < 0.5 * res).all();
-  };
-  const int steps = static_cast<int>(std::ceil((b - a).norm() / (res / 8))) + 1;
-  for (int i = 0; i <= steps; ++i) {
-    const Eigen::Vector3d c = a + (b - a) * (static_cast<double>(i) / steps);
-    if (overlapped(c, [&](const map::VoxelKey& k) { return !at_start(k); })) return true;
-  }
-  return false;
-}
-
 TEST(Traversability, RecoveryGoesAroundAWallNotThroughIt) {
   // A corridor too narrow for the box between the room's south wall and a thin wall along x: no voxel
   // in it is safe. The nearest safe voxels lie just north of the thin wall; the recovery move must go
@@ -303,19 +276,46 @@ TEST(Traversability, RecoveryGoesAroundAWallNotThroughIt) {
   const auto grid = TraversabilityGrid::build(*map, room, kCollisionBox).value();
   const Eigen::Vector3d p(0.0, -0.7, -1.5);
   ASSERT_FALSE(grid.isSafe(p));
-  ASSERT_FALSE(sweepTouchesNewOccupied(*map, p, p, kCollisionBox));
+  ASSERT_FALSE(test_fixtures::sweepTouchesNewOccupied(*map, p, p, kCollisionBox));
   const auto nearest = grid.nearestSafe(p, 1.6);
   ASSERT_TRUE(nearest.has_value());
   ASSERT_GT(nearest->y(), 0.0);  // across the thin wall
-  ASSERT_TRUE(sweepTouchesNewOccupied(*map, p, *nearest, kCollisionBox));
+  ASSERT_TRUE(test_fixtures::sweepTouchesNewOccupied(*map, p, *nearest, kCollisionBox));
 
-  EXPECT_FALSE(grid.nearestSafeClearOfOccupied(p, 0.0, kCollisionBox, 1.6).has_value());
-  const auto escape = grid.nearestSafeClearOfOccupied(p, 0.0, kCollisionBox, 3.0);
+  EXPECT_FALSE(grid.nearestSafeClearOfOccupied(*map, p, 0.0, kCollisionBox, 1.6).has_value());
+  const auto escape = grid.nearestSafeClearOfOccupied(*map, p, 0.0, kCollisionBox, 3.0);
   ASSERT_TRUE(escape.has_value());
   EXPECT_TRUE(grid.isSafe(*escape));
   EXPECT_GT(std::abs(escape->x()), 1.0);  // round an end of the thin wall
-  EXPECT_FALSE(sweepTouchesNewOccupied(*map, p, *escape, kCollisionBox));
-  EXPECT_FALSE(grid.nearestSafeClearOfOccupied(p, std::numeric_limits<double>::quiet_NaN(), kCollisionBox, 3.0));
+  EXPECT_FALSE(test_fixtures::sweepTouchesNewOccupied(*map, p, *escape, kCollisionBox));
+  EXPECT_FALSE(grid.nearestSafeClearOfOccupied(*map, p, std::numeric_limits<double>::quiet_NaN(), kCollisionBox, 3.0));
+}
+
+// A wall across the room outside the grid: the exploration box ends 1.4 m north of it, farther than
+// the grid's margin, and the estimate (moved there by a loop closure) lies south of it. The recovery
+// move reads those voxels from the snapshot: no move through the wall; without the wall, straight in.
+TEST(Traversability, RecoverySeesWallsOutsideTheGrid) {
+  const map::GridConfig config;
+  const Eigen::AlignedBox3d room(Eigen::Vector3d(-3.0, -3.0, -2.5), Eigen::Vector3d(3.0, 2.0, -0.5));
+  const Eigen::AlignedBox3d slab(Eigen::Vector3d(-3.0, -1.9, -2.5), Eigen::Vector3d(3.0, -1.8, -0.5));
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-3.0, -0.4, -2.5), room.max());
+  const Eigen::Vector3d p(0.0, -2.5, -1.5);
+  auto all = [](const map::VoxelKey&) { return true; };
+  auto walled = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, room, all),
+                                                 test_fixtures::carvedGrid(config, slab, all)});
+  const auto grid = TraversabilityGrid::build(*walled, box, kCollisionBox).value();
+  const map::VoxelKey wall_key = map::pointToKey(Eigen::Vector3d(0.0, -1.95, -1.5), 1.0 / config.resolution_m);
+  ASSERT_EQ(walled->at(wall_key).status, map::Occupancy::kOccupied);
+  ASSERT_EQ(grid.status(wall_key), map::Occupancy::kUnknown);  // outside the grid
+  ASSERT_FALSE(test_fixtures::sweepTouchesNewOccupied(*walled, p, p, kCollisionBox));
+  EXPECT_FALSE(grid.nearestSafeClearOfOccupied(*walled, p, 0.0, kCollisionBox, 3.0).has_value());
+
+  auto open = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, room, all)});
+  const auto open_grid = TraversabilityGrid::build(*open, box, kCollisionBox).value();
+  const auto escape = open_grid.nearestSafeClearOfOccupied(*open, p, 0.0, kCollisionBox, 3.0);
+  ASSERT_TRUE(escape.has_value());
+  EXPECT_TRUE(open_grid.isSafe(*escape));
+  EXPECT_FALSE(test_fixtures::sweepTouchesNewOccupied(*open, p, *escape, kCollisionBox));
 }
 
 }  // namespace

@@ -24,7 +24,9 @@
 // within root_tolerance_m and the result's waypoints start with that position: every edge the
 // vehicle is sent along is one the planner checked. Farther than that from every safe voxel (a loop
 // closure moved the map), the result is one straight move to the nearest safe voxel within
-// recovery_radius_m that the collision box reaches clear of occupied voxels (reason "recovering ...").
+// recovery_radius_m that the collision box reaches clear of occupied voxels (reason "recovering ...");
+// the same when the estimate has left the exploration box by no more than recovery_radius_m (a
+// closure moved it there; the vehicle moves back in). Farther out than that is an error.
 //
 // Lifecycle: create() with a config and the home (start) pose; then plan() with the newest snapshot
 // and the current pose, as often as needed. The planner only reads the snapshots it is given (it

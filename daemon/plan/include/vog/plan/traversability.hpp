@@ -67,8 +67,10 @@ class TraversabilityGrid {
   // safe voxel nearest to p within radius_m that a box of full sides box_m at heading yaw_rad reaches
   // by a straight translation from p without overlapping an occupied voxel (unknown space may be
   // crossed: the vehicle's own near field is never observed; occupied voxels the box overlaps already
-  // at p do not count; ties: lowest z, y, x), or nullopt.
-  std::optional<Eigen::Vector3d> nearestSafeClearOfOccupied(const Eigen::Vector3d& p_world, double yaw_rad,
+  // at p do not count; ties: lowest z, y, x), or nullopt. Occupied voxels outside the grid (p may lie
+  // outside the exploration box) are read from `snapshot`, the one the grid was synchronised with.
+  std::optional<Eigen::Vector3d> nearestSafeClearOfOccupied(const map::MergedMap& snapshot,
+                                                            const Eigen::Vector3d& p_world, double yaw_rad,
                                                             const Eigen::Vector3d& box_m, double radius_m) const;
   // Is the collision box swept from a to b in known free space, with a and b in the exploration box?
   bool edgeIsFree(const Eigen::Vector3d& a_world, const Eigen::Vector3d& b_world) const;
