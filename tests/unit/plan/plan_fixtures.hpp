@@ -136,7 +136,7 @@ inline bool bruteForceEdgeFree(const map::MergedMap& map, const Eigen::Vector3d&
 // Brute force for the recovery move: does the box (full sides box_m, axis-aligned) translated from a
 // to b overlap an occupied voxel that it does not already overlap at a? Steps of res / 8.
 inline bool sweepTouchesNewOccupied(const map::MergedMap& map, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                             const Eigen::Vector3d& box_m) {
+                                    const Eigen::Vector3d& box_m) {
   const double res = map.resolution();
   const Eigen::Vector3d h = 0.5 * box_m;
   auto overlapped = [&](const Eigen::Vector3d& c, const std::function<bool(const map::VoxelKey&)>& f) {
