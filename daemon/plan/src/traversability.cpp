@@ -333,7 +333,7 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(co
   std::vector<Eigen::Vector3d> occupied_box;  // q - p in the box frame
   const int reach = static_cast<int>(std::ceil((radius_m + h.norm()) * inv_resolution_));
   forEachKeyWithin(map::pointToKey(p_world, inv_resolution_), reach, [&](const VoxelKey& k) {
-    const map::Occupancy s = grid_.contains(k) ? status(k) : snapshot.query(map::keyToCentre(k, resolution_)).status;
+    const map::Occupancy s = grid_.contains(k) ? status(k) : snapshot.at(k).status;
     if (s != map::Occupancy::kOccupied) return;
     // Occupied voxels the box already overlaps at p are where the map disagrees with the vehicle (it
     // is physically there): they cannot be avoided and do not count.
