@@ -17,6 +17,8 @@
 // All three use the planner's global search (PlannerConfig::global_search) so that "complete" means
 // the same in every mode; --global-search 0 gives Bircher's local rule. Its map update (a finalized
 // copy of the global tree per planning call) is the baseline's "merge".
+// The odometry noise is drawn in the world frame (OdometryNoiseConfig::world_frame_xy_noise): the three
+// modes of one seed meet the same drift over time, so they are compared on one draw of the noise.
 // The planner works in the estimated (map) frame; a waypoint reaches the simulated vehicle through the
 // current navigation error, as a real controller steering on its own estimate would follow it.
 // The reconstruction scored in every mode is the final map's occupied voxels (the merged map; the
@@ -250,6 +252,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   sc.odometry.sigma2_x_m2ps *= 0.25;
   sc.odometry.sigma2_y_m2ps *= 0.25;
   sc.odometry.sigma2_yaw_rad2ps *= 0.25;
+  sc.odometry.world_frame_xy_noise = true;
   auto sim_r = sim::LockstepSimulation::create(world, sc);
   if (!sim_r) return fail(sim_r.error().message);
   sim::LockstepSimulation& simulation = *sim_r;

@@ -31,6 +31,10 @@ Status OdometryNoiseConfig::validate() const {
   if (!nonNegativeFinite(sigma2_yaw_rad2ps)) return bad("odometry.sigma2_yaw_rad2ps", sigma2_yaw_rad2ps, "finite and >= 0");
   if (!nonNegativeFinite(z_sigma_m)) return bad("odometry.z_sigma_m", z_sigma_m, "finite and >= 0");
   if (!nonNegativeFinite(roll_pitch_sigma_rad)) return bad("odometry.roll_pitch_sigma_rad", roll_pitch_sigma_rad, "finite and >= 0");
+  if (world_frame_xy_noise && sigma2_x_m2ps != sigma2_y_m2ps) {
+    return Error{"odometry.world_frame_xy_noise needs sigma2_x_m2ps = sigma2_y_m2ps (an isotropic x-y noise), got " +
+                 std::to_string(sigma2_x_m2ps) + " and " + std::to_string(sigma2_y_m2ps)};
+  }
   return {};
 }
 
@@ -69,11 +73,15 @@ Eigen::Vector3d OdometryCorruptor::stepPlanar(double x_m, double y_m, double yaw
   const double dx_w = x_m - previous_true_.x(), dy_w = y_m - previous_true_.y();
   Eigen::Vector3d rel(c0 * dx_w + s0 * dy_w, -s0 * dx_w + c0 * dy_w, geometry::wrapAngle(yaw_rad - previous_true_.z()));
   // + noise (thesis Eq. 4.1: additive white Gaussian noise on the relative motion).
-  rel.x() += sigma_step_.x() * n01(rng_);
-  rel.y() += sigma_step_.y() * n01(rng_);
+  Eigen::Vector2d n_xy;
+  n_xy.x() = sigma_step_.x() * n01(rng_);  // one draw per statement: a fixed order of the stream
+  n_xy.y() = sigma_step_.y() * n01(rng_);
   rel.z() += sigma_step_.z() * n01(rng_);
-  // P^_t (+) rel.
   const double c = std::cos(estimate_.z()), s = std::sin(estimate_.z());
+  // Drawn in the world frame: rotated into the estimate's frame, so that (+) below adds it unrotated.
+  if (config_.world_frame_xy_noise) n_xy = Eigen::Vector2d(c * n_xy.x() + s * n_xy.y(), -s * n_xy.x() + c * n_xy.y());
+  rel.head<2>() += n_xy;
+  // P^_t (+) rel.
   estimate_.x() += c * rel.x() - s * rel.y();
   estimate_.y() += s * rel.x() + c * rel.y();
   estimate_.z() = geometry::wrapAngle(estimate_.z() + rel.z());

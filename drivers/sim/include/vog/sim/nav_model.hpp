@@ -28,6 +28,11 @@ namespace vog::sim {
 // Sigma per second (T * Sigma after T seconds): much larger drift, a stress case.
 // z, roll and pitch get small absolute (non-accumulating) noise, as depth and IMU measure them
 // absolutely (thesis 4.4.1).
+// The x-y noise is drawn in the frame of the estimate (Eq. 4.1), or, with world_frame_xy_noise, in
+// the world frame: for an isotropic Sigma (sigma_x = sigma_y, required) the same distribution, but
+// the drift then depends on the seed and the time alone, not on the path (up to what the heading
+// error does to the motion): two planners flown on one seed meet the same drift, so comparing them
+// compares the planners, not two draws of the noise (common random numbers).
 enum class OdometryNoiseProfile { kEq41Literal, kRandomWalk };
 
 const char* toString(OdometryNoiseProfile profile);
@@ -41,6 +46,7 @@ struct OdometryNoiseConfig {
   double sigma2_yaw_rad2ps = 1e-7;              // thesis 4.4.1, sigma_psi^2
   double z_sigma_m = 0.005;                     // absolute depth noise
   double roll_pitch_sigma_rad = geometry::deg2rad(0.02);  // thesis Table 4.1, IMU roll/pitch
+  bool world_frame_xy_noise = false;            // see above; needs sigma2_x_m2ps == sigma2_y_m2ps
 
   Status validate() const;
   double dt_s() const { return 1.0 / rate_hz; }
