@@ -8,20 +8,40 @@
 namespace vog::sim {
 namespace {
 
-// Sample variance of the planar drift after T seconds over n seeded runs of the odometry
-// integrator alone (the vehicle drives a straight line at 0.25 m/s along x).
-Eigen::Vector3d driftVariance(const OdometryNoiseConfig& cfg, double T_s, int runs) {
+// Planar drift (estimate minus truth: x, y, yaw) after the vehicle followed `truth(t)` = (x, y, yaw)
+// for T seconds.
+template <class Truth>
+Eigen::Vector3d driftAlong(const OdometryNoiseConfig& cfg, std::uint64_t seed, double T_s, Truth truth) {
+  auto o = OdometryCorruptor::create(cfg, seed);
+  EXPECT_TRUE(o.ok());
+  const Eigen::Vector3d p0 = truth(0.0);
+  o->reset(p0.x(), p0.y(), p0.z());
+  Eigen::Vector3d p = p0, e = p0;
   const int steps = static_cast<int>(std::lround(T_s * cfg.rate_hz));
+  for (int k = 1; k <= steps; ++k) {
+    p = truth(k * cfg.dt_s());
+    e = o->stepPlanar(p.x(), p.y(), p.z());
+  }
+  return Eigen::Vector3d(e.x() - p.x(), e.y() - p.y(), geometry::wrapAngle(e.z() - p.z()));
+}
+
+Eigen::Vector3d straightLine(double t) { return Eigen::Vector3d(0.25 * t, 0.0, 0.0); }  // 0.25 m/s along x
+
+// A circle of radius 3 m at `rate` rad/s, heading along it.
+auto circle(double rate) {
+  return [rate](double t) {
+    return Eigen::Vector3d(3.0 * std::cos(rate * t), 3.0 * std::sin(rate * t),
+                           geometry::wrapAngle(rate * t + std::numbers::pi / 2));
+  };
+}
+
+// Sample variance of the planar drift after T seconds over n seeded runs of the odometry integrator
+// alone, along `truth` (default: a straight line).
+template <class Truth = decltype(&straightLine)>
+Eigen::Vector3d driftVariance(const OdometryNoiseConfig& cfg, double T_s, int runs, Truth truth = &straightLine) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum2 = Eigen::Vector3d::Zero();
   for (int run = 0; run < runs; ++run) {
-    auto o = OdometryCorruptor::create(cfg, static_cast<std::uint64_t>(1000 + run));
-    EXPECT_TRUE(o.ok());
-    o->reset(0.0, 0.0, 0.0);
-    Eigen::Vector3d e = Eigen::Vector3d::Zero();
-    for (int k = 1; k <= steps; ++k) {
-      const double x = 0.25 * k * cfg.dt_s();
-      e = o->stepPlanar(x, 0.0, 0.0) - Eigen::Vector3d(x, 0.0, 0.0);
-    }
+    const Eigen::Vector3d e = driftAlong(cfg, static_cast<std::uint64_t>(1000 + run), T_s, truth);
     sum += e;
     sum2 += e.cwiseProduct(e);
   }
@@ -69,36 +89,16 @@ TEST(Odometry, WithoutNoiseTheIntegratorReproducesACurvedTrajectory) {
   }
 }
 
-// Planar drift (estimate minus truth) after the vehicle followed `truth(t)` for T seconds.
-template <class Truth>
-Eigen::Vector2d driftAlong(const OdometryNoiseConfig& cfg, std::uint64_t seed, double T_s, Truth truth) {
-  auto o = OdometryCorruptor::create(cfg, seed);
-  EXPECT_TRUE(o.ok());
-  const Eigen::Vector3d p0 = truth(0.0);
-  o->reset(p0.x(), p0.y(), p0.z());
-  Eigen::Vector3d p = p0, e = p0;
-  const int steps = static_cast<int>(std::lround(T_s * cfg.rate_hz));
-  for (int k = 1; k <= steps; ++k) {
-    p = truth(k * cfg.dt_s());
-    e = o->stepPlanar(p.x(), p.y(), p.z());
-  }
-  return e.head<2>() - p.head<2>();
-}
-
 TEST(Odometry, WorldFrameNoiseGivesEveryPathTheSameDrift) {
   OdometryNoiseConfig cfg;
   cfg.profile = OdometryNoiseProfile::kRandomWalk;
   cfg.sigma2_yaw_rad2ps = 0.0;  // no heading error (which turns each path's motion its own way)
-  auto straight = [](double t) { return Eigen::Vector3d(0.25 * t, 0.0, 0.0); };
-  auto circle = [](double t) {
-    return Eigen::Vector3d(3.0 * std::cos(0.08 * t), 3.0 * std::sin(0.08 * t), geometry::wrapAngle(0.08 * t + std::numbers::pi / 2));
-  };
   const double T = 200.0;
   cfg.world_frame_xy_noise = false;  // Eq. 4.1: drawn in the estimate's frame, so each path turns it its own way
-  const Eigen::Vector2d a = driftAlong(cfg, 7, T, straight), b = driftAlong(cfg, 7, T, circle);
+  const Eigen::Vector3d a = driftAlong(cfg, 7, T, straightLine), b = driftAlong(cfg, 7, T, circle(0.08));
   EXPECT_GT((a - b).norm(), 0.1) << a.transpose() << " / " << b.transpose();
   cfg.world_frame_xy_noise = true;
-  const Eigen::Vector2d c = driftAlong(cfg, 7, T, straight), d = driftAlong(cfg, 7, T, circle);
+  const Eigen::Vector3d c = driftAlong(cfg, 7, T, straightLine), d = driftAlong(cfg, 7, T, circle(0.08));
   EXPECT_GT(c.norm(), 0.1);  // sqrt(2 T sigma^2) = 0.74 m expected
   EXPECT_LT((c - d).norm(), 1e-9) << c.transpose() << " / " << d.transpose();
 }
@@ -107,21 +107,10 @@ TEST(Odometry, WorldFrameNoiseHasTheSameVariance) {
   OdometryNoiseConfig cfg;
   cfg.profile = OdometryNoiseProfile::kRandomWalk;
   cfg.world_frame_xy_noise = true;
-  auto circle = [](double t) {
-    return Eigen::Vector3d(3.0 * std::cos(0.2 * t), 3.0 * std::sin(0.2 * t), geometry::wrapAngle(0.2 * t + std::numbers::pi / 2));
-  };
   const double T = 20.0;
-  const int runs = 1000;
-  Eigen::Vector2d sum = Eigen::Vector2d::Zero(), sum2 = Eigen::Vector2d::Zero();
-  for (int run = 0; run < runs; ++run) {
-    const Eigen::Vector2d e = driftAlong(cfg, static_cast<std::uint64_t>(1000 + run), T, circle);
-    sum += e;
-    sum2 += e.cwiseProduct(e);
-  }
-  const Eigen::Vector2d mean = sum / runs;
-  const Eigen::Vector2d v = (sum2 - runs * mean.cwiseProduct(mean)) / (runs - 1);
+  const Eigen::Vector3d v = driftVariance(cfg, T, 1000, circle(0.2));
   const Eigen::Vector3d pred = cfg.predictedVariance(T);
-  for (int i = 0; i < 2; ++i) EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
   cfg.sigma2_y_m2ps = 2.0 * cfg.sigma2_x_m2ps;  // anisotropic: no longer the same distribution
   const Status st = cfg.validate();
   ASSERT_FALSE(st.ok());
