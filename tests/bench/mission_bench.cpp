@@ -11,7 +11,9 @@
 //             gain at the end point of an edge only);
 //   vog       VOG-Map of submaps at raw odometry, the sonar planner (constrained sampling, gain swept
 //             along each edge), no loop closures;
-//   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges); it also
+//   vog-lc    the same with degeneracy-aware loop closures (the map deforms and re-merges) and active
+//             loop closure (slam::RevisitPolicy: after a stretch without a closure to the older map
+//             the planner sends the vehicle back to an old view, NbvPlanner::requestRevisit); it also
 //             scores the same run's submaps at their raw odometry poses (rmse_same_run_odometry: the
 //             thesis's Fig. 4.12(b), the run of (c) with its loop closures unused).
 // All three use the planner's global search (PlannerConfig::global_search) so that "complete" means
@@ -45,6 +47,7 @@
 #include "vog/sim/scene.hpp"
 #include "vog/sim/world.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
+#include "vog/slam/revisit_policy.hpp"
 
 #include <CLI/CLI.hpp>
 #include <octomap/OcTree.h>
@@ -185,6 +188,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   bool json = false;
   bool root_first = true;
   bool obstruction_feedback = true;
+  slam::RevisitConfig revisit_config;  // vog-lc only
   slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
   plan::PlannerConfig pc;          // the same
   CLI::App app{"vog-bench mission"};
@@ -201,6 +205,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--clearance", pc.clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--obstruction-feedback", obstruction_feedback,
                  "report a refused move to the planner, which backs the vehicle off the way it came (1/0)");
+  app.add_option("--revisit-after-s", revisit_config.after_s,
+                 "vog-lc: revisit an old view after this long without an anchoring closure, s (0: off)");
+  app.add_option("--revisit-span-s", revisit_config.anchor_span_s,
+                 "vog-lc: a closure anchors when its submaps started this far apart, s");
   app.add_option("--root-first", root_first,
                  "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
                  "the fix, to reproduce the collisions it caused");
@@ -294,6 +302,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   auto planner_r = plan::NbvPlanner::create(pc, toWaypoint(T_start));
   if (!planner_r) return fail(planner_r.error().message);
   plan::NbvPlanner& planner = **planner_r;
+  // Active loop closure (vog-lc): the mission starts at simulated time 0.
+  auto revisit_r = slam::RevisitPolicy::create(revisit_config, 0);
+  if (!revisit_r) return fail(revisit_r.error().message);
+  slam::RevisitPolicy& revisit = *revisit_r;
 
   std::vector<IterationRow> iterations;
   std::vector<CollisionRow> collision_rows;
@@ -458,6 +470,13 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     if (!snap) return fail("map snapshot: " + snap.error().message);
     const vog::bench::Stopwatch w;
     const double cpu0 = threadCpuS();
+    if (mode == Mode::kVogLc) {
+      std::vector<plan::Waypoint> views;
+      for (const Pose3& T : revisit.due(pipeline.submaps(), slam::closurePairs(pipeline.closures()),
+                                        estimatedPose().translation(), simulation.stampNs()))
+        views.push_back(toWaypoint(T));
+      if (!views.empty()) planner.requestRevisit(std::move(views));
+    }
     auto r = planner.plan(*snap, toWaypoint(estimatedPose()));
     const double ms = 1e3 * w.seconds();
     plan_cpu_ms_all.push_back(1e3 * (threadCpuS() - cpu0));
@@ -656,6 +675,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
   out.add("merge_wait_ms_p95", merge_wait_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_wait_ms_all, 0.95));
   out.add("collisions", static_cast<std::int64_t>(collisions));
+  out.add("revisits", static_cast<std::int64_t>(revisit.revisits()));
   out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
   std::cout << out.str();
   return 0;

@@ -357,8 +357,12 @@ void Daemon::publishMappingState() {
     i.closed = true;
     infos->push_back(i);
   }
+  auto records = std::make_shared<const std::vector<slam::SubmapRecord>>(pipeline_->submaps());
+  auto pairs = std::make_shared<const std::vector<slam::ClosurePair>>(slam::closurePairs(pipeline_->closures()));
   const std::lock_guard lock(state_mutex_);
   submap_infos_ = std::move(infos);
+  submap_records_ = std::move(records);
+  closure_pairs_ = std::move(pairs);
   n_closures_ = static_cast<std::uint32_t>(pipeline_->closures().size());
   if (!pipeline_->submaps().empty()) {
     const slam::SubmapRecord& r = pipeline_->submaps().back();
@@ -438,6 +442,8 @@ void Daemon::planningLoop() {
     std::size_t n_submaps = 0;
     Pose3 T_now;
     std::int64_t stamp = 0;
+    std::shared_ptr<const std::vector<slam::SubmapRecord>> records;
+    std::shared_ptr<const std::vector<slam::ClosurePair>> closures;
     {
       std::unique_lock lock(state_mutex_);
       planner_cv_.wait_for(lock, std::chrono::milliseconds(50));
@@ -454,6 +460,8 @@ void Daemon::planningLoop() {
       n_submaps = submap_infos_ ? submap_infos_->size() : 0;
       T_now = estimatedPose();
       stamp = odometry_.stamp_ns;
+      records = submap_records_;
+      closures = closure_pairs_;
     }
     if (start_now) {
       if (n_submaps == 0) T_map_home_ = T_now;  // home is where a new mission starts
@@ -470,6 +478,15 @@ void Daemon::planningLoop() {
         continue;
       }
       planner_ = std::move(planner).value();
+      revisit_.reset();
+      if (config_.mapping.loop_closures) {
+        auto revisit = slam::RevisitPolicy::create(config_.revisit, stamp);
+        if (!revisit) {
+          fail("revisit", revisit.error());
+          continue;
+        }
+        revisit_ = std::move(revisit).value();
+      }
       if (n_submaps == 0) {
         // A full turn on the spot first: the vertical fan sees nothing ahead until it has swept around,
         // and the planner needs known free space to grow its tree in.
@@ -534,6 +551,15 @@ void Daemon::planningLoop() {
       }
       if (auto st = sendWaypoints(*home, stamp); !st) fail("waypoints", st.error());
       continue;
+    }
+    if (revisit_ && records && closures) {
+      std::vector<plan::Waypoint> views;
+      for (const Pose3& T : revisit_->due(*records, *closures, T_now.translation(), stamp)) views.push_back(toWaypoint(T));
+      if (!views.empty()) {
+        spdlog::info("planner: no loop closure to the older map for {:.0f} s; revisiting an old view",
+                     config_.revisit.after_s);
+        planner_->requestRevisit(std::move(views));
+      }
     }
     const Clock::time_point t0 = Clock::now();
     auto result = planner_->plan(snapshot, toWaypoint(T_now));

@@ -92,7 +92,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.finish();
 }
 
-void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
+void readPlanner(ConfigMap m, plan::PlannerConfig& c, slam::RevisitConfig& revisit) {
   m.vector3("collision_box_m", c.collision_box_m, 0.01, 20.0);
   m.number("clearance_m", c.clearance_m, 0.0, 5.0);
   m.number("planner_range_m", c.planner_range_m, 0.1, 100.0);
@@ -116,6 +116,8 @@ void readPlanner(ConfigMap m, plan::PlannerConfig& c) {
   m.number("gain_occupied", c.gain_occupied, 0.0, 1e6);
   m.number("gain_threshold", c.gain_threshold, 0.0, 1e12);
   m.unsignedInteger("seed", c.seed, 0, std::numeric_limits<std::uint64_t>::max());
+  m.number("revisit_after_s", revisit.after_s, 0.0, 1e6);
+  m.number("revisit_anchor_span_s", revisit.anchor_span_s, 1.0, 1e6);
   m.finish();
 }
 
@@ -259,7 +261,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   merge.number("remerge_translation_m", c.merge.remerge_translation_m, 0.0, 10.0);
   merge.degrees("remerge_rotation_deg", c.merge.remerge_rotation_rad, 0.0, 180.0);
   merge.finish();
-  readPlanner(root.map("planner"), c.planner);
+  readPlanner(root.map("planner"), c.planner, c.revisit);
   readNav(root.map("nav"), c.nav);
   readDevices(root.map("devices"), c.devices);
 

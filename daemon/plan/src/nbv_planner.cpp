@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 namespace vog::plan {
 
@@ -168,7 +169,21 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     }
     start.p_world = *snapped;
   }
+  // The vehicle is sent to the tree's root first when it was snapped to a safe voxel.
+  auto fromRoot = [&](PlanResult r) {
+    if (r.status == PlanStatus::kNoPath || start.p_world == current.p_world) return r;
+    std::vector<Waypoint> w{Waypoint{start.p_world, current.yaw_rad}};
+    for (const Waypoint& x : r.waypoints) w.push_back(x);
+    r.waypoints = std::move(w);
+    return r;
+  };
   tree_.push_back(TreeNode{start, -1, 0.0, 0.0, 0.0, false});
+  if (std::vector<Waypoint> views = std::exchange(revisit_views_, {}); !views.empty()) {
+    if (revisit(start, std::move(views), result)) {
+      seed_branch_.clear();
+      return fromRoot(std::move(result));
+    }
+  }
 
   // Seed: the rest of the last best branch, as long as its edges are still free (Bircher 2016).
   int parent = 0;
@@ -239,14 +254,6 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   }
   result.samples = samples;
   result.tree_size = static_cast<int>(tree_.size());
-  // The vehicle is sent to the tree's root first when it was snapped to a safe voxel.
-  auto fromRoot = [&](PlanResult r) {
-    if (r.status == PlanStatus::kNoPath || start.p_world == current.p_world) return r;
-    std::vector<Waypoint> w{Waypoint{start.p_world, current.yaw_rad}};
-    for (const Waypoint& x : r.waypoints) w.push_back(x);
-    r.waypoints = std::move(w);
-    return r;
-  };
   if (tree_.size() == 1) {
     result.reason = "no collision-free edge from the current position " + describe(root) + " in " +
                     std::to_string(samples) + " samples";
@@ -292,6 +299,32 @@ std::vector<Waypoint> NbvPlanner::alongPath(const std::vector<Eigen::Vector3d>& 
   while (std::abs(geometry::wrapAngle(goal_yaw - yaw)) > 1e-12) out.push_back({points.back(), turnToward(goal_yaw)});
   if (!out.empty()) out.back().yaw_rad = geometry::wrapAngle(goal_yaw);
   return out;
+}
+
+void NbvPlanner::requestRevisit(std::vector<Waypoint> views) {
+  std::erase_if(views, [](const Waypoint& w) { return !w.p_world.allFinite() || !std::isfinite(w.yaw_rad); });
+  revisit_views_ = std::move(views);
+}
+
+bool NbvPlanner::revisit(const Waypoint& start, std::vector<Waypoint> views, PlanResult& result) const {
+  if (views.size() > kMaxRevisitTries) views.resize(kMaxRevisitTries);
+  for (const Waypoint& view : views) {
+    const std::optional<Eigen::Vector3d> goal = grid_->nearestSafe(view.p_world, config_.root_tolerance_m);
+    if (!goal) continue;
+    auto path = grid_->findPath(start.p_world, *goal);
+    if (!path.ok()) continue;
+    result.status = PlanStatus::kExplore;
+    result.waypoints = alongPath(path.value(), start.yaw_rad, view.yaw_rad);
+    if (result.waypoints.empty()) continue;  // already there, facing that way
+    result.best_branch.assign(1, start);
+    for (const Waypoint& x : result.waypoints) result.best_branch.push_back(x);
+    result.tree_size = 1;
+    std::ostringstream s;
+    s << "revisit " << describe(view.p_world) << " yaw " << view.yaw_rad << " at " << describe(*goal);
+    result.reason = s.str();
+    return true;
+  }
+  return false;
 }
 
 bool NbvPlanner::globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <limits>
 #include <map>
 #include <tuple>
 #include <mutex>
@@ -431,6 +432,41 @@ TEST_F(PlannerMaps, GlobalGoalIsNeverChosenTwice) {
     for (const Eigen::Vector3d& earlier : goals) ASSERT_GE((g - earlier).norm(), c.global_spacing_m - 1e-9);
     goals.push_back(g);
   }
+}
+
+TEST_F(PlannerMaps, RevisitGoesToTheFirstReachableViewAndArrivesWithItsHeading) {
+  const auto map = half();
+  const Waypoint start{{-3.5, 0.0, -1.75}, kPi};
+  const PlannerConfig c = roomConfig(3);
+  auto planner = NbvPlanner::create(c, start).value();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Waypoint unknown_east{{3.0, 0.0, -1.75}, 0.5};  // unknown: no safe voxel near it
+  const Waypoint known_west{{-1.0, 1.5, -1.75}, -2.0};
+  planner->requestRevisit({Waypoint{{nan, 0.0, -1.75}, 0.0}, unknown_east, known_west});
+  const PlanResult r = planner->plan(map, start).value();
+  ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
+  EXPECT_EQ(r.reason.rfind("revisit", 0), 0u) << r.reason;
+  ASSERT_FALSE(r.waypoints.empty());
+  EXPECT_LE((r.waypoints.back().p_world - known_west.p_world).norm(), c.root_tolerance_m);
+  EXPECT_TRUE(planner->traversability()->isSafe(r.waypoints.back().p_world));
+  EXPECT_DOUBLE_EQ(r.waypoints.back().yaw_rad, known_west.yaw_rad);
+  expectPathValid(*map, c, start, r.waypoints);
+
+  // One request serves one call; a request none of whose views is reachable changes nothing (the
+  // random draws included): the same plan as a planner that was never asked.
+  const PlanResult next = planner->plan(map, r.waypoints.back()).value();
+  EXPECT_EQ(next.reason.rfind("revisit", 0), std::string::npos);
+  auto asked = NbvPlanner::create(c, start).value();
+  auto never = NbvPlanner::create(c, start).value();
+  asked->requestRevisit({unknown_east});
+  const PlanResult ra = asked->plan(map, start).value();
+  const PlanResult rn = never->plan(map, start).value();
+  ASSERT_EQ(ra.waypoints.size(), rn.waypoints.size());
+  for (std::size_t i = 0; i < ra.waypoints.size(); ++i) {
+    EXPECT_EQ(ra.waypoints[i].p_world, rn.waypoints[i].p_world);
+    EXPECT_EQ(ra.waypoints[i].yaw_rad, rn.waypoints[i].yaw_rad);
+  }
+  EXPECT_EQ(ra.best_value, rn.best_value);
 }
 
 TEST_F(PlannerMaps, SnappedRootIsTheFirstWaypoint) {

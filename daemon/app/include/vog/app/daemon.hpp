@@ -37,6 +37,7 @@
 #include "vog/mission/raw_log.hpp"
 #include "vog/plan/nbv_planner.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
+#include "vog/slam/revisit_policy.hpp"
 
 #include <asio/io_context.hpp>
 
@@ -122,6 +123,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
   std::unique_ptr<plan::NbvPlanner> planner_;         // planning thread
+  std::optional<slam::RevisitPolicy> revisit_;        // planning thread; with loop closures only
   std::unique_ptr<VehicleSource> source_;
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
@@ -153,6 +155,9 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
   std::shared_ptr<const std::vector<api::SubmapInfo>> submap_infos_;
   std::uint32_t n_closures_ = 0;
+  // What the revisit policy reads (copies published by the mapping thread).
+  std::shared_ptr<const std::vector<slam::SubmapRecord>> submap_records_;
+  std::shared_ptr<const std::vector<slam::ClosurePair>> closure_pairs_;
   mutable std::shared_ptr<const api::Cloud> cloud_;   // cache for the snapshot version below
   mutable std::uint64_t cloud_version_ = 0;
   std::optional<Error> failure_;

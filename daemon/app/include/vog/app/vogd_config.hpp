@@ -15,6 +15,7 @@
 #include "vog/nav/dead_reckoning.hpp"
 #include "vog/plan/planner_config.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
+#include "vog/slam/revisit_policy.hpp"
 
 #include <Eigen/Core>
 
@@ -82,6 +83,7 @@ struct VogdConfig {
   slam::MappingPipelineConfig mapping;
   map::MergeConfig merge;
   plan::PlannerConfig planner;
+  slam::RevisitConfig revisit;  // keys planner.revisit_*; used when loop closures are enabled
   nav::DeadReckoningConfig nav;
   DevicesSection devices;
   ApiSection api;

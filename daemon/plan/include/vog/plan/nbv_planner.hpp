@@ -100,6 +100,16 @@ class NbvPlanner {
   // direction (it was turning on the spot), changes nothing and gives nullopt.
   std::optional<Eigen::Vector3d> reportObstruction(const Eigen::Vector3d& p_world, const Eigen::Vector3d& target_world);
 
+  // Asks the next plan() to send the vehicle back to one of `views` (poses it has mapped from
+  // before, in the caller's order of preference) instead of exploring: the first view with a safe
+  // voxel within root_tolerance_m that a known-free path reaches becomes the goal, arrived at with
+  // the view's heading (kExplore, reason "revisit ..."). A mapping layer uses this to close loops
+  // when its estimate has drifted from the older map (active loop closure). At most
+  // kMaxRevisitTries views are tried; none reachable, or non-finite views, and plan() explores as
+  // usual. One request serves one plan() call.
+  void requestRevisit(std::vector<Waypoint> views);
+  static constexpr std::size_t kMaxRevisitTries = 8;
+
   // The tree of the last plan() call (tests and plots).
   const std::vector<TreeNode>& lastTree() const { return tree_; }
   const PlannerConfig& config() const { return config_; }
@@ -116,6 +126,8 @@ class NbvPlanner {
   bool headingOk(const Waypoint& from, const Waypoint& to) const;
   void addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded);
   PlanResult goHome(const Waypoint& current, PlanResult result) const;
+  // A pending revisit request (requestRevisit); true when it set `result` to kExplore toward a view.
+  bool revisit(const Waypoint& start, std::vector<Waypoint> views, PlanResult& result) const;
   // The global search (see above); true when it set `result` to kExplore toward a goal.
   bool globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result);
   // Waypoints along `points` (points[0] excluded), heading turned toward goal_yaw by at most
@@ -131,6 +143,7 @@ class NbvPlanner {
   std::vector<Waypoint> seed_branch_;  // best branch of the last call after its first edge
   std::vector<Eigen::Vector3d> global_goals_;  // goals chosen by the global search so far
   std::optional<Eigen::Vector3d> pending_retreat_;  // where the next plan() backs off to
+  std::vector<Waypoint> revisit_views_;             // requestRevisit() for the next plan()
   std::vector<TreeNode> tree_;
 };
 
