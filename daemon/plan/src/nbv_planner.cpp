@@ -77,6 +77,7 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
                                         {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
+  for (const Eigen::Vector3d& c : contacts_) grid_->addContact(c);
   return {};
 }
 
@@ -88,6 +89,10 @@ std::optional<Eigen::Vector3d> NbvPlanner::reportObstruction(const Eigen::Vector
   if (d.norm() < 1e-6) return std::nullopt;
   pending_retreat_ = p_world - config_.obstruction_retreat_m * d.normalized();
   seed_branch_.clear();
+  const Eigen::Vector3d contact = p_world + 0.5 * config_.collision_box_m.head<2>().norm() * d.normalized();
+  if (contacts_.size() == kMaxContacts) contacts_.erase(contacts_.begin());
+  contacts_.push_back(contact);
+  if (grid_) grid_->addContact(contact);
   return pending_retreat_;
 }
 

@@ -170,6 +170,20 @@ void TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
         if (status == map::Occupancy::kUnknown && assumedFree(k)) status = map::Occupancy::kFree;
         status_[indexOf(k)] = static_cast<std::uint8_t>(status);
       }
+  for (const VoxelKey& c : contacts_)
+    if (clipped.contains(c)) status_[indexOf(c)] = static_cast<std::uint8_t>(map::Occupancy::kOccupied);
+}
+
+void TraversabilityGrid::addContact(const Eigen::Vector3d& p_world) {
+  if (!p_world.allFinite()) return;
+  const VoxelKey k = map::pointToKey(p_world, inv_resolution_);
+  if (!grid_.contains(k)) return;
+  if (std::find(contacts_.begin(), contacts_.end(), k) == contacts_.end()) contacts_.push_back(k);
+  status_[indexOf(k)] = static_cast<std::uint8_t>(map::Occupancy::kOccupied);
+  KeyBox around;
+  around.min = k;
+  around.max = k;
+  recompute(dilate(around, r_));
 }
 
 void TraversabilityGrid::recompute(KeyBox region) {

@@ -26,6 +26,7 @@ PlannerConfig roomConfig(std::uint64_t seed = 1) {
   c.box_max_world_m = kRoom.max();
   c.seed = seed;
   c.assume_free_radius_m = 0.0;  // the maps carry all the free space the tests mean
+  c.clearance_m = 0.1;           // the rooms, pockets and doors below are drawn for one voxel of it
   return c;
 }
 
@@ -580,6 +581,22 @@ TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDroppe
   ASSERT_TRUE(planner->plan(map, {*back, 0.25}).ok());
   EXPECT_GT(planner->lastTree().size(), 1u);
   for (const TreeNode& n : planner->lastTree()) EXPECT_FALSE(n.seeded);
+  // The place it ran into stays blocked although the map shows it free: no later edge sweeps the
+  // box over the contact, half the footprint diagonal ahead of where it stopped.
+  const Eigen::Vector3d contact = stopped + Eigen::Vector3d(std::sqrt(0.5), 0.0, 0.0);
+  EXPECT_FALSE(planner->traversability()->isSafe(contact));
+  EXPECT_FALSE(planner->traversability()->isSafe(stopped));
+  for (int call = 0; call < 5; ++call) {
+    const auto& tree = planner->lastTree();
+    for (std::size_t i = 1; i < tree.size(); ++i) {
+      const Eigen::Vector3d a = tree[static_cast<std::size_t>(tree[i].parent)].w.p_world, b = tree[i].w.p_world;
+      for (double t = 0.0; t <= 1.0; t += 0.01) {
+        const Eigen::Vector3d q = a + t * (b - a) - contact;
+        EXPECT_GT(q.head<2>().cwiseAbs().maxCoeff(), 0.5 * std::sqrt(2.0)) << "edge " << i << " call " << call;
+      }
+    }
+    ASSERT_TRUE(planner->plan(map, {*back, 0.25}).ok());
+  }
   // Turning on the spot gives no direction; non-finite input is refused.
   EXPECT_FALSE(planner->reportObstruction(stopped, stopped).has_value());
   EXPECT_FALSE(planner->reportObstruction(Eigen::Vector3d(NAN, 0, 0), target).has_value());
@@ -607,6 +624,37 @@ TEST(TraversabilityGrid, ClearanceNarrowsDoorsButNotTheVerticalMargin) {
   EXPECT_TRUE(clear.isSafe(from));
   EXPECT_TRUE(clear.isSafe(to));
   EXPECT_FALSE(clear.findPath(from, to).ok());
+}
+
+// A contact blocks its surroundings like an occupied voxel, outlives updates from snapshots that show
+// its voxel free, and only a rebuild forgets it.
+TEST(TraversabilityGrid, AContactStaysBlockedThroughUpdatesUntilARebuild) {
+  const map::GridConfig config;
+  auto all = [](const map::VoxelKey&) { return true; };
+  const Eigen::AlignedBox3d west(kRoom.min(), Eigen::Vector3d(0.0, kRoom.max().y(), kRoom.max().z()));
+  auto merged = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all)});
+  const Eigen::Vector3d box(1.0, 1.0, 0.5);
+  auto grid = TraversabilityGrid::build(*merged->snapshot(), kRoom, anyHeadingBox(box)).value();
+  const Eigen::Vector3d contact(-2.5, 0.0, -1.75), near(-2.0, 0.0, -1.75), far(-4.0, 0.0, -1.75);
+  ASSERT_TRUE(grid.isSafe(contact));
+  ASSERT_TRUE(grid.edgeIsFree(far, near));
+  grid.addContact(contact);
+  grid.addContact(Eigen::Vector3d(NAN, 0.0, 0.0));    // ignored
+  grid.addContact(Eigen::Vector3d(100.0, 0.0, -1.75));  // outside the grid: ignored
+  EXPECT_EQ(grid.status(map::pointToKey(contact, 1.0 / config.resolution_m)), map::Occupancy::kOccupied);
+  EXPECT_FALSE(grid.isSafe(contact));
+  EXPECT_FALSE(grid.isSafe(near));  // 0.5 m away: within the inflation
+  EXPECT_TRUE(grid.isSafe(far));
+  EXPECT_FALSE(grid.edgeIsFree(far, near));
+  // A newer snapshot carves the whole room free, the contact's block included.
+  ASSERT_TRUE(merged->add(test_fixtures::entryAtIdentity(1, test_fixtures::carvedGrid(config, kRoom, all))).ok());
+  const auto newer = merged->snapshot();
+  ASSERT_TRUE(grid.update(*newer).ok());
+  EXPECT_FALSE(grid.isSafe(contact));
+  EXPECT_FALSE(grid.edgeIsFree(far, near));
+  const auto rebuilt = TraversabilityGrid::build(*newer, kRoom, anyHeadingBox(box)).value();
+  EXPECT_TRUE(rebuilt.isSafe(contact));
+  EXPECT_TRUE(rebuilt.edgeIsFree(far, near));
 }
 
 TEST(TraversabilityGrid, ReachableIsTheConnectedSafeRegionInBreadthFirstOrder) {

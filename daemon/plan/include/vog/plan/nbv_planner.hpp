@@ -96,8 +96,11 @@ class NbvPlanner {
   // The vehicle was stopped at p_world on its way to target_world by something the map does not
   // show (its estimate and the map disagree, or an unmapped obstacle): the next plan() first backs
   // it off by obstruction_retreat_m the way it came (kExplore with that one waypoint), and the kept
-  // branch, which led there, is dropped. Returns the retreat position; non-finite input, or no
-  // direction (it was turning on the spot), changes nothing and gives nullopt.
+  // branch, which led there, is dropped. The point ahead of p_world at half the collision box's
+  // footprint diagonal becomes a contact (TraversabilityGrid::addContact; the planner keeps the
+  // last kMaxContacts of them across grid rebuilds), so later plans do not send the vehicle into the
+  // same place again. Returns the retreat position; non-finite input, or no direction (it was
+  // turning on the spot), changes nothing and gives nullopt.
   std::optional<Eigen::Vector3d> reportObstruction(const Eigen::Vector3d& p_world, const Eigen::Vector3d& target_world);
 
   // Asks the next plan() to send the vehicle back to one of `views` (poses it has mapped from
@@ -109,6 +112,7 @@ class NbvPlanner {
   // usual. One request serves one plan() call.
   void requestRevisit(std::vector<Waypoint> views);
   static constexpr std::size_t kMaxRevisitTries = 8;
+  static constexpr std::size_t kMaxContacts = 64;
 
   // The tree of the last plan() call (tests and plots).
   const std::vector<TreeNode>& lastTree() const { return tree_; }
@@ -144,6 +148,7 @@ class NbvPlanner {
   std::vector<Eigen::Vector3d> global_goals_;  // goals chosen by the global search so far
   std::optional<Eigen::Vector3d> pending_retreat_;  // where the next plan() backs off to
   std::vector<Waypoint> revisit_views_;             // requestRevisit() for the next plan()
+  std::vector<Eigen::Vector3d> contacts_;           // reportObstruction(), oldest first
   std::vector<TreeNode> tree_;
 };
 

@@ -19,8 +19,9 @@
 // Lifecycle: built from one snapshot; update() catches up with a newer snapshot of the same MergedMap
 // writer by re-reading only the blocks changed or removed since the version it reflects and
 // recomputing the safe flags in the bounding box of those blocks dilated by r (the result equals a
-// rebuild from the newer snapshot; the cost never exceeds one). It holds
-// no reference to any snapshot. Not thread-safe: one planner owns one grid.
+// rebuild from the newer snapshot; the cost never exceeds one). Contacts (addContact) are voxels the
+// vehicle ran into although the map shows them free: they count as occupied until the grid is
+// rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe: one planner owns one grid.
 
 #include "vog/geometry/result.hpp"
 #include "vog/map/merged_map.hpp"
@@ -57,6 +58,10 @@ class TraversabilityGrid {
   // another MergedMap (writerId), with an older version than the grid's, or of another resolution
   // gives an error (the caller rebuilds).
   Result<TraversabilityUpdate> update(const map::MergedMap& newer);
+
+  // Marks the voxel at p_world occupied (see above) and recomputes the safe flags around it;
+  // outside the grid or non-finite: ignored.
+  void addContact(const Eigen::Vector3d& p_world);
 
   // Is a collision box centred at p (world) inside the exploration box and in known free space?
   bool isSafe(const Eigen::Vector3d& p_world) const;
@@ -132,6 +137,7 @@ class TraversabilityGrid {
   Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
   std::vector<std::uint8_t> status_;  // map::Occupancy per voxel
   std::vector<std::uint8_t> safe_;   // 1 = a box centred in this voxel is in known free space
+  std::vector<map::VoxelKey> contacts_;  // addContact(), inside grid_
   std::uint64_t map_version_ = 0;
   std::uint64_t map_writer_ = 0;  // MergedMap::writerId() of the snapshots this grid reflects
 };
