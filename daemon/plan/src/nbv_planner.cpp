@@ -318,9 +318,10 @@ bool NbvPlanner::revisit(const Waypoint& start, std::vector<Waypoint> views, Pla
     if (!goal) continue;
     auto path = grid_->findPath(start.p_world, *goal);
     if (!path.ok()) continue;
+    std::vector<Waypoint> waypoints = alongPath(path.value(), start.yaw_rad, view.yaw_rad);
+    if (waypoints.empty()) continue;  // already there, facing that way
     result.status = PlanStatus::kExplore;
-    result.waypoints = alongPath(path.value(), start.yaw_rad, view.yaw_rad);
-    if (result.waypoints.empty()) continue;  // already there, facing that way
+    result.waypoints = std::move(waypoints);
     result.best_branch.assign(1, start);
     for (const Waypoint& x : result.waypoints) result.best_branch.push_back(x);
     result.tree_size = 1;

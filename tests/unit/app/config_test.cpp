@@ -99,6 +99,9 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(pa.root_tolerance_m, pb.root_tolerance_m);
   EXPECT_EQ(pa.recovery_radius_m, pb.recovery_radius_m);
   EXPECT_EQ(pa.obstruction_retreat_m, pb.obstruction_retreat_m);
+  EXPECT_EQ(pa.clearance_m, pb.clearance_m);
+  EXPECT_EQ(a.revisit.after_s, b.revisit.after_s);
+  EXPECT_EQ(a.revisit.anchor_span_s, b.revisit.anchor_span_s);
   EXPECT_EQ(pa.gain_unknown, pb.gain_unknown);
   EXPECT_EQ(pa.gain_free, pb.gain_free);
   EXPECT_EQ(pa.gain_occupied, pb.gain_occupied);
@@ -154,6 +157,9 @@ TEST(VogdConfig, OutOfRangeValueNamesTheRange) {
   const std::string e = errorOf("source: devices\nmapping:\n  grid: {resolution_m: 5}\n");
   EXPECT_NE(e.find("test.yaml:3: mapping.grid.resolution_m: must be in [0.01, 1], got 5"), std::string::npos) << e;
   EXPECT_NE(errorOf("source: devices\nplanner: {lambda: -0.5}\n").find("planner.lambda: must be in [0, 100], got -0.5"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nplanner: {revisit_after_s: -1}\n")
+                .find("planner.revisit_after_s: must be in [0, 1e+06], got -1"),
             std::string::npos);
   EXPECT_NE(errorOf("source: devices\napi: {port: 70000}\n").find("api.port: must be in [0, 65535], got 70000"),
             std::string::npos);

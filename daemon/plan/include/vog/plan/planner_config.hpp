@@ -29,8 +29,8 @@ struct PlannerConfig {
   // the vehicle is drawn at an estimate that drifts in x, y and heading between loop closures, so a
   // box that only just fits in the map's free space can touch the real surface. None in z: depth is
   // measured, it does not drift (our choice: two voxels; vog-bench mission vog-lc, seeds 1-10 with
-  // revisits: refused moves in 3 of 20 runs, against 2 runs with 8 refused steps at one voxel; the
-  // revisits cross the map when the estimate has drifted most).
+  // revisits and contacts: 4 refused steps in 3 of 20 runs; one voxel without contacts: 8 in 2 runs,
+  // the revisits crossing the map when the estimate had drifted most).
   double clearance_m = 0.2;
   double planner_range_m = 5.0;           // d_max^planner (Table 4.2)
   double lambda = 0.5;                    // gain discount per metre of path cost (Table 4.2)

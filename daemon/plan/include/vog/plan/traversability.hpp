@@ -21,7 +21,8 @@
 // recomputing the safe flags in the bounding box of those blocks dilated by r (the result equals a
 // rebuild from the newer snapshot; the cost never exceeds one). Contacts (addContact) are voxels the
 // vehicle ran into although the map shows them free: they count as occupied until the grid is
-// rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe: one planner owns one grid.
+// rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe:
+// one planner owns one grid.
 
 #include "vog/geometry/result.hpp"
 #include "vog/map/merged_map.hpp"
