@@ -54,7 +54,6 @@ class RevisitPolicy {
   std::vector<geometry::Pose3> due(const std::vector<SubmapRecord>& submaps, const std::vector<ClosurePair>& closures,
                                    const Eigen::Vector3d& p_world_now, std::int64_t now_ns);
   int revisits() const { return revisits_; }
-  const RevisitConfig& config() const { return config_; }
 
  private:
   RevisitPolicy(const RevisitConfig& config, std::int64_t start_stamp_ns) : config_(config), start_ns_(start_stamp_ns) {}
