@@ -262,7 +262,17 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   if (tree_.size() == 1) {
     result.reason = "no collision-free edge from the current position " + describe(root) + " in " +
                     std::to_string(samples) + " samples";
-    if (config_.global_search && globalGoal(map, start, result)) return fromRoot(std::move(result));
+    if (config_.global_search) {
+      if (globalGoal(map, start, result)) return fromRoot(std::move(result));
+      // The global search saw every safe voxel reachable from here and none is worth a visit: in a
+      // region too narrow for the tree's edges that is the end of the exploration, as when no branch
+      // has gain, and the vehicle goes home (it came in, so usually there is a way back). Boxed in at
+      // home, it cannot move at all: no path.
+      if ((home_.p_world - start.p_world).norm() >= resolution_m_) {
+        result.reason += "; no reachable view left (" + std::to_string(result.global_candidates) + " candidates)";
+        return fromRoot(goHome(start, std::move(result)));
+      }
+    }
     result.status = PlanStatus::kNoPath;
     return result;
   }

@@ -272,6 +272,43 @@ TEST(NbvPlanner, BoxedInIsNoPathNotAHang) {
   }
 }
 
+TEST(NbvPlanner, CorridorTooNarrowForTheTreeWithNothingLeftGoesHome) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  auto all = [](const map::VoxelKey&) { return true; };
+  // The pocket of BoxedInIsNoPathNotAHang stretched by 4 voxels in x and walled in: its safe voxels are
+  // a line 0.48 m long, too short for a sampled edge to stay on it, and everything is known (no gain).
+  const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-9, -9, -21), res);
+  const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(13, 9, -15), res);
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), all)});
+  const Eigen::Vector3d home = map::keyToCentre(map::VoxelKey(0, 0, -18), res);
+  const Eigen::Vector3d far_end = map::keyToCentre(map::VoxelKey(4, 0, -18), res);
+  PlannerConfig c = roomConfig();
+  c.n_max = 5;
+  c.n_tol = 5;  // (a sample inside the line's 5 voxels would give an edge; 30 draws miss them)
+  c.max_samples = 30;
+  ASSERT_TRUE(c.global_search);
+  auto planner = NbvPlanner::create(c, {home, 0.0}).value();
+  const PlanResult r = planner->plan(map->snapshot(), {far_end, 0.0}).value();
+  ASSERT_EQ(planner->traversability()->safeCount(), 5u);
+  EXPECT_EQ(r.tree_size, 1);
+  EXPECT_EQ(r.status, PlanStatus::kComplete) << r.reason;
+  EXPECT_NE(r.reason.find("no collision-free edge"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("no reachable view left"), std::string::npos) << r.reason;
+  ASSERT_FALSE(r.waypoints.empty());
+  EXPECT_LT((r.waypoints.back().p_world - home).norm(), 1e-9);
+  // Every waypoint on the corridor's line.
+  for (const Waypoint& w : r.waypoints) {
+    EXPECT_TRUE(planner->traversability()->isSafe(w.p_world)) << w.p_world.transpose();
+    EXPECT_NEAR(w.p_world.y(), home.y(), 1e-9);
+  }
+  // Without the global search (Bircher's local rule) nothing says the exploration is over: no path.
+  PlannerConfig local = c;
+  local.global_search = false;
+  auto local_planner = NbvPlanner::create(local, {home, 0.0}).value();
+  EXPECT_EQ(local_planner->plan(map->snapshot(), {far_end, 0.0}).value().status, PlanStatus::kNoPath);
+}
+
 TEST(NbvPlanner, CompleteButNoWayHomeIsNoPath) {
   const map::GridConfig config;
   auto all = [](const map::VoxelKey&) { return true; };
