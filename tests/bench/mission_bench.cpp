@@ -359,16 +359,22 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         mapping_error = inserted;
         return;
       }
-      // The baseline's map; in the VOG modes the same-run comparison (outside the mission's time).
-      if (mode == Mode::kBaseline || same_run_global_tree) {
-        const vog::bench::Stopwatch global_insert;
-        if (auto st = global.insertScan(p.input.T_world_vehicle_odom * fan.T_vehicle_sensor, fan, p.input.scan); !st) {
+      auto intoGlobalTree = [&] {
+        return global.insertScan(p.input.T_world_vehicle_odom * fan.T_vehicle_sensor, fan, p.input.scan);
+      };
+      if (mode == Mode::kBaseline) {  // the baseline's map
+        if (auto st = intoGlobalTree(); !st) {
           mapping_error = st;
           return;
         }
-        if (mode == Mode::kBaseline) {
-          ++baseline_scans;
-          continue;
+        ++baseline_scans;
+        continue;
+      }
+      if (same_run_global_tree) {  // the same-run comparison (evaluation, outside the mission's time)
+        const vog::bench::Stopwatch global_insert;
+        if (auto st = intoGlobalTree(); !st) {
+          mapping_error = st;
+          return;
         }
         evaluation_s += global_insert.seconds();
       }

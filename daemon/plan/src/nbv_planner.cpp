@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -24,6 +25,37 @@ bool inBox(const PlannerConfig& c, const Eigen::Vector3d& p) {
 std::string outsideBox(const char* what, const PlannerConfig& c, const Eigen::Vector3d& p) {
   return std::string(what) + " " + describe(p) + " is outside the exploration box plan.box_min_world_m " +
          describe(c.box_min_world_m) + " .. plan.box_max_world_m " + describe(c.box_max_world_m);
+}
+
+// Greedy thinning in the given order: a voxel is kept when no kept voxel and no voxel of `taken` lies
+// closer than spacing_vox (in voxels) to it. Each kept or taken voxel marks the ball around it in a
+// dense mask over `box`, so each test is one lookup.
+std::vector<map::VoxelKey> spreadOut(const std::vector<map::VoxelKey>& keys, const std::vector<map::VoxelKey>& taken,
+                                     double spacing_vox, const map::KeyBox& box) {
+  const int r = static_cast<int>(std::ceil(spacing_vox));
+  std::vector<map::VoxelKey> ball;
+  for (int z = -r; z <= r; ++z)
+    for (int y = -r; y <= r; ++y)
+      for (int x = -r; x <= r; ++x)
+        if (static_cast<double>(x * x + y * y + z * z) < spacing_vox * spacing_vox) ball.emplace_back(x, y, z);
+  const Eigen::Vector3i size = box.max - box.min + map::VoxelKey::Ones();
+  std::vector<std::uint8_t> near(static_cast<std::size_t>(size.prod()), 0);
+  auto indexOf = [&](const map::VoxelKey& k) {
+    const map::VoxelKey d = k - box.min;
+    return static_cast<std::size_t>(d.x() + size.x() * (d.y() + size.y() * d.z()));
+  };
+  auto mark = [&](const map::VoxelKey& k) {
+    for (const map::VoxelKey& o : ball)
+      if (box.contains(k + o)) near[indexOf(k + o)] = 1;
+  };
+  for (const map::VoxelKey& t : taken) mark(t);
+  std::vector<map::VoxelKey> kept;
+  for (const map::VoxelKey& k : keys) {
+    if (!box.contains(k) || near[indexOf(k)]) continue;
+    mark(k);
+    kept.push_back(k);
+  }
+  return kept;
 }
 
 }  // namespace
@@ -262,19 +294,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
   if (tree_.size() == 1) {
     result.reason = "no collision-free edge from the current position " + describe(root) + " in " +
                     std::to_string(samples) + " samples";
-    if (config_.global_search) {
-      if (globalGoal(map, start, result)) return fromRoot(std::move(result));
-      // The global search saw every safe voxel reachable from here and none is worth a visit: in a
-      // region too narrow for the tree's edges that is the end of the exploration, as when no branch
-      // has gain, and the vehicle goes home (it came in, so usually there is a way back). Boxed in at
-      // home, it cannot move at all: no path.
-      if ((home_.p_world - start.p_world).norm() >= resolution_m_) {
-        result.reason += "; no reachable view left (" + std::to_string(result.global_candidates) + " candidates)";
-        return fromRoot(goHome(start, std::move(result)));
-      }
-    }
-    result.status = PlanStatus::kNoPath;
-    return result;
+    return fromRoot(globalGoalOrHome(map, start, std::move(result), false));
   }
   std::size_t best = 1;
   for (std::size_t i = 2; i < tree_.size(); ++i)
@@ -286,8 +306,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     s << "best branch value " << result.best_value << " <= plan.gain_threshold " << config_.gain_threshold << " after "
       << result.tree_size << " nodes";
     result.reason = s.str();
-    if (config_.global_search && globalGoal(map, start, result)) return fromRoot(std::move(result));
-    return fromRoot(goHome(start, std::move(result)));
+    return fromRoot(globalGoalOrHome(map, start, std::move(result), true));
   }
   // Indices from the best node back to the root (at least two: best >= 1).
   std::vector<std::size_t> chain;
@@ -344,20 +363,16 @@ bool NbvPlanner::revisit(const Waypoint& start, std::vector<Waypoint> views, Pla
 }
 
 bool NbvPlanner::globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result) {
-  const auto lattice = std::max(1L, std::lround(config_.global_spacing_m / resolution_m_));
-  auto onLattice = [&](int v) { return ((v % lattice) + lattice) % lattice == 0; };
   const std::vector<map::VoxelKey> reach = grid_->reachable(start.p_world, grid_->statusArray().size());
-  std::vector<Eigen::Vector3d> candidates;  // nearest first (breadth-first order)
-  for (const map::VoxelKey& k : reach) {
-    if (!onLattice(k.x()) || !onLattice(k.y()) || !onLattice(k.z())) continue;
-    const Eigen::Vector3d c = map::keyToCentre(k, resolution_m_);
-    // A goal reached before whose gain did not go away (unknown voxels the fan cannot resolve) is
-    // not chosen again: the search cannot loop.
-    const bool chosen_before = std::any_of(global_goals_.begin(), global_goals_.end(), [&](const Eigen::Vector3d& g) {
-      return (g - c).norm() < config_.global_spacing_m;
-    });
-    if (!chosen_before) candidates.push_back(c);
-  }
+  // Candidate views: the reachable safe voxels thinned to global_spacing_m apart, nearest first
+  // (breadth-first order), so a reachable region of any shape has some (an absolute lattice can miss
+  // a thin one entirely). A goal reached before whose gain did not go away (unknown voxels the fan
+  // cannot resolve) is not chosen again, nor anything within the spacing of it: the search cannot loop.
+  std::vector<map::VoxelKey> taken;
+  for (const Eigen::Vector3d& g : global_goals_) taken.push_back(map::pointToKey(g, 1.0 / resolution_m_));
+  std::vector<Eigen::Vector3d> candidates;
+  for (const map::VoxelKey& k : spreadOut(reach, taken, config_.global_spacing_m / resolution_m_, grid_->gridKeys()))
+    candidates.push_back(map::keyToCentre(k, resolution_m_));
   // More candidates than evaluations allowed: every stride-th, so the whole reachable space is
   // sampled (nearest first) rather than only its nearest part.
   const std::size_t max_candidates = static_cast<std::size_t>(config_.global_max_candidates);
@@ -366,10 +381,12 @@ bool NbvPlanner::globalGoal(const map::MergedMap& map, const Waypoint& start, Pl
   for (std::size_t i = 0; i < candidates.size(); i += stride) {
     const Eigen::Vector3d& c = candidates[i];
     ++evaluated;
-    // The fan at 8 headings (the vehicle can face any of them on arrival).
+    // The fan at 8 headings (the vehicle can face any of them on arrival); at the vehicle's own voxel
+    // only the 7 it does not face (the view it faces is the one its sonar already has).
+    const bool here = (c - start.p_world).norm() < resolution_m_;
     double best_gain = 0.0;
     double best_yaw = start.yaw_rad;
-    for (int h = 0; h < 8; ++h) {
+    for (int h = here ? 1 : 0; h < 8; ++h) {
       const Waypoint w{c, geometry::wrapAngle(start.yaw_rad + h * std::numbers::pi / 4)};
       const double g = gain_->segmentGain(map, w, w, &*grid_);
       if (g > best_gain) {
@@ -400,6 +417,24 @@ bool NbvPlanner::globalGoal(const map::MergedMap& map, const Waypoint& start, Pl
   }
   result.global_candidates = evaluated;
   return false;
+}
+
+PlanResult NbvPlanner::globalGoalOrHome(const map::MergedMap& map, const Waypoint& start, PlanResult result,
+                                        bool tree_has_edge) {
+  if (config_.global_search) {
+    if (globalGoal(map, start, result)) return result;
+    if (!tree_has_edge)
+      result.reason += "; no reachable view left (" + std::to_string(result.global_candidates) + " candidates)";
+  }
+  // Without an edge, only the global search, which saw every safe voxel reachable from here, says the
+  // exploration is over (in a region too narrow for the tree's edges); the vehicle came in, so
+  // usually there is a way back. Boxed in at home it cannot move at all.
+  const bool at_home = (home_.p_world - start.p_world).norm() < resolution_m_;
+  if (!tree_has_edge && (!config_.global_search || at_home)) {
+    result.status = PlanStatus::kNoPath;
+    return result;
+  }
+  return goHome(start, std::move(result));
 }
 
 PlanResult NbvPlanner::goHome(const Waypoint& current, PlanResult result) const {

@@ -309,6 +309,45 @@ TEST(NbvPlanner, CorridorTooNarrowForTheTreeWithNothingLeftGoesHome) {
   EXPECT_EQ(local_planner->plan(map->snapshot(), {far_end, 0.0}).value().status, PlanStatus::kNoPath);
 }
 
+TEST(NbvPlanner, GlobalSearchFindsViewsInASafeRegionOffAnyFixedLattice) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  // The corridor of CorridorTooNarrowForTheTreeWithNothingLeftGoesHome, 4 m long and open at its east
+  // end (unknown beyond): its safe voxels are one line at z key -18, so not one of them lies on a
+  // lattice of global_spacing_m (5 voxels) anchored at key 0. The view from its east part sees the
+  // unknown, and the global search must find it.
+  const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-9, -9, -21), res);
+  const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(40, 9, -15), res);
+  auto walls_but_east = [](const map::VoxelKey& k) { return k.x() <= 40; };
+  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), walls_but_east)});
+  const Eigen::Vector3d home = map::keyToCentre(map::VoxelKey(0, 0, -18), res);
+  PlannerConfig c = roomConfig();
+  c.n_max = 1;
+  c.n_tol = 1;
+  c.max_samples = 1;  // (one draw off the line: no tree edge, the global search decides)
+  auto planner = NbvPlanner::create(c, {home, 0.0}).value();
+  auto planned = planner->plan(map->snapshot(), {home, 0.0});
+  ASSERT_TRUE(planned.ok()) << planned.error().message;
+  const PlanResult r = planned.value();
+  const TraversabilityGrid& grid = *planner->traversability();
+  const std::vector<map::VoxelKey> line = grid.reachable(home, grid.statusArray().size());
+  ASSERT_GT(line.size(), 20u);
+  const long lattice = std::lround(c.global_spacing_m / res);
+  for (const map::VoxelKey& k : line) ASSERT_NE(k.z() % lattice, 0) << k.transpose();
+  ASSERT_EQ(r.tree_size, 1);
+  ASSERT_EQ(r.status, PlanStatus::kExplore) << r.reason;
+  EXPECT_TRUE(r.global_goal);
+  EXPECT_GT(r.global_candidates, 0);
+  ASSERT_FALSE(r.waypoints.empty());
+  const Waypoint& goal = r.waypoints.back();
+  EXPECT_TRUE(grid.isSafe(goal.p_world)) << goal.p_world.transpose();
+  EXPECT_GT(goal.p_world.x(), home.x()) << r.reason << " yaw " << goal.yaw_rad << " n " << r.waypoints.size();
+  auto probe = SonarGain::create(c, res);
+  ASSERT_TRUE(probe.ok()) << probe.error().message;
+  EXPECT_GT(probe.value().segmentGain(*map->snapshot(), goal, goal), c.global_min_gain);
+  for (const Waypoint& w : r.waypoints) EXPECT_TRUE(grid.isSafe(w.p_world)) << w.p_world.transpose();
+}
+
 TEST(NbvPlanner, CompleteButNoWayHomeIsNoPath) {
   const map::GridConfig config;
   auto all = [](const map::VoxelKey&) { return true; };

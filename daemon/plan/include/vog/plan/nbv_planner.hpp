@@ -14,7 +14,7 @@
 // tree (re-checked against the newer map).
 //
 // Global search (PlannerConfig::global_search): when no node's value exceeds gain_threshold (after
-// growing to n_tol nodes or spending max_samples), the nearest reachable lattice view whose fan sees
+// growing to n_tol nodes or spending max_samples), the nearest reachable candidate view whose fan sees
 // more than global_min_gain becomes the goal, reached along a known-free path (kExplore with several
 // waypoints); a goal is never chosen twice, so the search cannot loop.
 // Termination: when neither the tree nor the global search finds gain, exploration is complete and
@@ -134,6 +134,11 @@ class NbvPlanner {
   bool revisit(const Waypoint& start, std::vector<Waypoint> views, PlanResult& result) const;
   // The global search (see above); true when it set `result` to kExplore toward a goal.
   bool globalGoal(const map::MergedMap& map, const Waypoint& start, PlanResult& result);
+  // The local tree found no move worth making (tree_has_edge: it grew at least one edge, so the
+  // vehicle can move here): a global goal, else the path home. Without an edge the end needs the
+  // global search's word that no view is left and somewhere to go; boxed in at home, or with the
+  // global search off, it is kNoPath.
+  PlanResult globalGoalOrHome(const map::MergedMap& map, const Waypoint& start, PlanResult result, bool tree_has_edge);
   // Waypoints along `points` (points[0] excluded), heading turned toward goal_yaw by at most
   // max_heading_change_rad per waypoint, then on the spot at the last point until it is reached.
   std::vector<Waypoint> alongPath(const std::vector<Eigen::Vector3d>& points, double start_yaw, double goal_yaw) const;

@@ -81,8 +81,8 @@ struct PlannerConfig {
   // Global search when the local tree finds no branch above gain_threshold (our choice; Bircher
   // 2016 stops there, and its receding horizon of a few 2 m edges declares "complete" while
   // unexplored regions remain farther away or behind obstacles, the local-minimum problem that
-  // history-aware NBVP variants address, e.g. Selin et al. 2019): candidate views on a lattice of
-  // global_spacing_m over the safe voxels reachable from the vehicle are tried nearest first (in
+  // history-aware NBVP variants address, e.g. Selin et al. 2019): candidate views, the safe voxels
+  // reachable from the vehicle thinned to global_spacing_m apart, are tried nearest first (in
   // path steps; every k-th when there are more than global_max_candidates, so the whole reachable
   // space is sampled); the first whose fan, at the best of 8 headings, sees more than
   // global_min_gain is the next goal, reached by a known-free path. Exploration is complete only
