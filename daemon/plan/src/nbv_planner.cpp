@@ -146,20 +146,58 @@ Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m, double cle
   return {side_xy + 2.0 * clearance_m, side_xy + 2.0 * clearance_m, collision_box_m.z()};
 }
 
-Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
-  if (!snapshot) return Error{"plan: no map snapshot was given"};
+Status NbvPlanner::prepare(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current,
+                           const char* what) {
+  if (!snapshot) return Error{std::string(what) + ": no map snapshot was given"};
   const map::MergedMap& map = *snapshot;
   if (!current.p_world.allFinite() || !std::isfinite(current.yaw_rad))
-    return Error{"plan: current pose " + describe(current.p_world) + " yaw " + std::to_string(current.yaw_rad) +
-                 " is not finite"};
+    return Error{std::string(what) + ": current pose " + describe(current.p_world) + " yaw " +
+                 std::to_string(current.yaw_rad) + " is not finite"};
   // A loop closure can move the estimate outside the box: within root_tolerance_m the tree grows from
   // the nearest safe position inside it, within recovery_radius_m the vehicle moves back in (below).
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
   if (box.exteriorDistance(current.p_world) > std::max(config_.root_tolerance_m, config_.recovery_radius_m))
-    return Error{outsideBox("plan: current position", config_, current.p_world)};
+    return Error{outsideBox((std::string(what) + ": current position").c_str(), config_, current.p_world)};
   if (map.query(current.p_world).status == map::Occupancy::kOccupied)
-    return Error{"plan: current position " + describe(current.p_world) + " is inside an obstacle (occupied voxel)"};
-  if (Status s = syncTraversability(map); !s.ok()) return s.error();
+    return Error{std::string(what) + ": current position " + describe(current.p_world) +
+                 " is inside an obstacle (occupied voxel)"};
+  return syncTraversability(map);
+}
+
+PlanResult NbvPlanner::fromRoot(const Waypoint& root, const Waypoint& current, PlanResult result) {
+  if (result.status == PlanStatus::kNoPath || root.p_world == current.p_world) return result;
+  std::vector<Waypoint> w{Waypoint{root.p_world, current.yaw_rad}};
+  for (const Waypoint& x : result.waypoints) w.push_back(x);
+  result.waypoints = std::move(w);
+  return result;
+}
+
+Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
+  if (Status s = prepare(snapshot, current, "plan home"); !s.ok()) return s.error();
+  PlanResult result;
+  result.map_version = snapshot->version();
+  result.reason = "return home";
+  // Stopped by an obstruction: back off the way the vehicle came first, then home from there.
+  Waypoint from = current;
+  const std::optional<Eigen::Vector3d> back = std::exchange(pending_retreat_, std::nullopt);
+  if (back) from.p_world = *back;
+  Waypoint start = from;
+  if (!grid_->isSafe(from.p_world)) {
+    const auto snapped = grid_->nearestSafe(from.p_world, config_.root_tolerance_m);
+    if (!snapped) {
+      result.reason += "; the position " + describe(from.p_world) + " is not within plan.root_tolerance_m of a safe voxel";
+      return result;
+    }
+    start.p_world = *snapped;
+  }
+  result = fromRoot(start, from, goHome(start, std::move(result)));
+  if (back && result.status == PlanStatus::kComplete) result.waypoints.insert(result.waypoints.begin(), from);
+  return result;
+}
+
+Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
+  if (Status s = prepare(snapshot, current, "plan"); !s.ok()) return s.error();
+  const map::MergedMap& map = *snapshot;
 
   PlanResult result;
   result.map_version = map.version();
@@ -207,13 +245,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     start.p_world = *snapped;
   }
   // The vehicle is sent to the tree's root first when it was snapped to a safe voxel.
-  auto fromRoot = [&](PlanResult r) {
-    if (r.status == PlanStatus::kNoPath || start.p_world == current.p_world) return r;
-    std::vector<Waypoint> w{Waypoint{start.p_world, current.yaw_rad}};
-    for (const Waypoint& x : r.waypoints) w.push_back(x);
-    r.waypoints = std::move(w);
-    return r;
-  };
+  auto fromRoot = [&](PlanResult r) { return NbvPlanner::fromRoot(start, current, std::move(r)); };
   tree_.push_back(TreeNode{start, -1, 0.0, 0.0, 0.0, false});
   if (std::vector<Waypoint> views = std::exchange(revisit_views_, {}); !views.empty()) {
     if (revisit(start, std::move(views), result)) {

@@ -93,6 +93,13 @@ class NbvPlanner {
   // outside the exploration box, pose inside an occupied voxel, map of another resolution.
   Result<PlanResult> plan(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current);
 
+  // The way home on `snapshot` from `current` (the vehicle's one way home: an exploration that
+  // completes ends on the same path): kComplete with a known-free path from the nearest safe voxel
+  // within root_tolerance_m to the home pose, headings turned as in plan(); kNoPath with the reason
+  // when there is none. After reportObstruction() the path starts with the retreat move (as plan()'s
+  // would). Same errors as plan(); it leaves the kept branch and a revisit request for the next plan().
+  Result<PlanResult> planHome(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current);
+
   // The vehicle was stopped at p_world on its way to target_world by something the map does not
   // show (its estimate and the map disagree, or an unmapped obstacle): the next plan() first backs
   // it off by obstruction_retreat_m the way it came (kExplore with that one waypoint), and the kept
@@ -126,7 +133,12 @@ class NbvPlanner {
 
  private:
   NbvPlanner(const PlannerConfig& config, const Waypoint& home);
+  // Checks the inputs of plan() and planHome() (`what` names the call in errors) and brings the
+  // traversability grid up to the snapshot.
+  Status prepare(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current, const char* what);
   Status syncTraversability(const map::MergedMap& map);
+  // The vehicle is sent to the tree's root first when it was snapped to a safe voxel away from `current`.
+  static PlanResult fromRoot(const Waypoint& root, const Waypoint& current, PlanResult result);
   bool headingOk(const Waypoint& from, const Waypoint& to) const;
   void addNode(const map::MergedMap& map, int parent, const Waypoint& w, bool seeded);
   PlanResult goHome(const Waypoint& current, PlanResult result) const;
