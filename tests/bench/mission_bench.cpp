@@ -1,8 +1,9 @@
 // vog-bench mission: autonomous exploration in closed loop (thesis 4.4-4.5), in lockstep simulated time.
 // The simulator drives the vehicle and its sensors; every sonar scan goes to the mapping side, and
-// after every map change the submap set goes to the merge thread (MergeWorker, thesis 4.5.5); whenever
-// the vehicle reaches its waypoint the next-best-view planner chooses the next one on the newest
-// published snapshot. Lockstep determinism: the bench waits for the merge thread (waitIdle) only at
+// after every map change the submap set goes to the merge thread (MergeWorker, thesis 4.5.5). The loop
+// itself is vogd's: an explore::ExplorationController stepped once per simulation step (the initial
+// spin, next-best-view plans on the newest published snapshot whenever the vehicle reached its
+// waypoints, revisits, obstructions, the way home and the ending). Lockstep determinism: the bench waits for the merge thread (waitIdle) only at
 // fixed points of simulated time: right before the next submission, right before each planning call
 // and before the final evaluation. So the snapshot the planner sees depends only on the seed, while
 // merging overlaps with simulation and mapping in between (merge_wait_ms_p95 says how long the
@@ -43,6 +44,7 @@
 #include "bench_registry.hpp"
 #include "reconstruction_eval.hpp"
 
+#include "vog/explore/exploration_controller.hpp"
 #include "vog/map/merge_worker.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/map/voxel_key.hpp"
@@ -74,6 +76,7 @@ namespace {
 
 using vog::geometry::Pose3;
 namespace map = vog::map;
+namespace explore = vog::explore;
 namespace plan = vog::plan;
 namespace sim = vog::sim;
 namespace slam = vog::slam;
@@ -104,10 +107,6 @@ class ScanQueue final : public sim::SimulationSink {
   std::map<std::int64_t, Pose3> T_true_by_stamp;  // every scan's true pose (closures are judged by it)
   Pose3 T_odom_now = Pose3::Identity();
 };
-
-plan::Waypoint toWaypoint(const Pose3& T) {
-  return {T.translation(), vog::geometry::yawOf(T.linear())};
-}
 
 Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
   return vog::geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
@@ -190,12 +189,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   int coverage_every = 10;
   std::string out_dir;
   bool json = false;
-  bool root_first = true;
   bool obstruction_feedback = true;
   bool same_run_global_tree = false;
-  slam::RevisitConfig revisit_config;  // vog-lc only
   slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
-  plan::PlannerConfig pc;          // the same
+  explore::ExplorationConfig loop;  // the same (vogd's loop); revisits with vog-lc only
+  plan::PlannerConfig& pc = loop.planner;
+  slam::RevisitConfig& revisit_config = loop.revisit;
   CLI::App app{"vog-bench mission"};
   app.add_option("--scene", scene_file, "scene YAML file");
   app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
@@ -214,9 +213,6 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                  "vog-lc: revisit an old view after this long without an anchoring closure, s (0: off)");
   app.add_option("--revisit-span-s", revisit_config.anchor_span_s,
                  "vog-lc: a closure anchors when its submaps started this far apart, s");
-  app.add_option("--root-first", root_first,
-                 "send the vehicle to the planner's snapped root first (1); 0 drops that waypoint, as before "
-                 "the fix, to reproduce the collisions it caused");
   app.add_option("--lc-max-fitness", mc.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
   app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
                  "loop closures: share of the source cloud with a correspondence at the result");
@@ -307,14 +303,11 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     pc.constrained_sampling = false;
     pc.gain_along_edge = false;
   }
-  const Pose3 T_start = scene->T_world_start;
-  auto planner_r = plan::NbvPlanner::create(pc, toWaypoint(T_start));
-  if (!planner_r) return fail(planner_r.error().message);
-  plan::NbvPlanner& planner = **planner_r;
-  // Active loop closure (vog-lc): the mission starts at simulated time 0.
-  auto revisit_r = slam::RevisitPolicy::create(revisit_config, 0);
-  if (!revisit_r) return fail(revisit_r.error().message);
-  slam::RevisitPolicy& revisit = *revisit_r;
+  loop.max_submaps = submap_budget;
+  loop.revisits = mode == Mode::kVogLc;  // active loop closure
+  auto controller_r = explore::ExplorationController::create(loop);
+  if (!controller_r) return fail(controller_r.error().message);
+  explore::ExplorationController& controller = *controller_r;
 
   std::vector<IterationRow> iterations;
   std::vector<CollisionRow> collision_rows;
@@ -401,8 +394,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       const vog::bench::Stopwatch w;
       if (auto st = syncMerges(); !st) return st.error();
       merge_wait_ms_all.push_back(1e3 * w.seconds());
-      if (!published) return vog::Error{"no merged map yet (no submap was completed)"};
-      return published;
+      return published;  // null until the first submap is merged: the controller waits
     }
     const vog::bench::Stopwatch w;
     auto copy = map::LocalGrid::fromTree(grid_config, std::make_unique<octomap::OcTree>(global.tree()));
@@ -431,20 +423,18 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     return simulation.vehicle().setWaypoints(std::move(out));
   };
 
-  // Start: a full turn on the spot, so the planner has known free space to grow its tree in.
-  {
-    const sim::VehicleState& s = simulation.vehicle().state();
-    std::vector<sim::Waypoint> spin;
-    for (int k = 1; k <= 4; ++k) spin.push_back({s.xyz_world, vog::geometry::wrapAngle(s.yaw_rad + k * std::numbers::pi / 2)});
-    if (auto st = simulation.vehicle().setWaypoints(spin); !st) return fail(st.error().message);
-  }
   const vog::bench::Stopwatch mission;
   simulation.start(queue);
+  // vogd's loop (ExplorationController) from the scene's start, at simulated time 0; the estimate
+  // is the truth there.
+  if (auto st = controller.start(scene->T_world_start, vog::mission::Box{scene->bounds_world.min(), scene->bounds_world.max()},
+                                 simulation.stampNs(), true);
+      !st)
+    return fail(st.error().message);
   std::string end_reason = "budget";
-  bool returning = false;
-  int stalled = 0;
   std::int64_t next_path_sample_ns = 0;
   std::uint64_t collisions = 0;
+  std::vector<slam::ClosurePair> closure_pairs;  // pipeline.closures() as pairs, for revisits
   while (true) {
     const sim::StepResult step = simulation.step(queue);
     processScans();
@@ -453,8 +443,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       path_samples.emplace_back(simulation.vehicle().state().T_world_vehicle(), estimatedPose());
       next_path_sample_ns += 1'000'000'000;
     }
+    explore::StepInput in;
     if (step.status == sim::MotionStatus::kBlocked) {
-      const plan::TraversabilityGrid* g = planner.traversability();
+      const plan::TraversabilityGrid* g = controller.planner()->traversability();
       CollisionRow c{simS(), simulation.vehicle().state().T_world_vehicle(), estimatedPose(),
                      static_cast<int>(iterations.size()) - 1, pipeline.closures().size(),
                      g != nullptr && g->isSafe(estimatedPose().translation())};
@@ -466,74 +457,75 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       collision_rows.push_back(c);
       ++collisions;  // the planner sent the vehicle into the scene; it was stopped short
       // The vehicle reports where it was stopped and where it was going (its estimate, as the
-      // daemon does); the next plan backs the vehicle off the way it came.
+      // daemon's sources do); the vehicle holds.
       if (const auto next = simulation.vehicle().nextWaypoint(); next && obstruction_feedback) {
         const Pose3 T_map_true = estimatedPose() * c.T_true.inverse();
-        planner.reportObstruction(c.T_estimated.translation(), T_map_true * next->xyz_world);
+        in.obstruction = explore::Obstruction{c.T_estimated.translation(), T_map_true * next->xyz_world};
       }
       if (auto st = simulation.vehicle().setWaypoints({}); !st) return fail(st.error().message);
     }
-    if (nSubmaps() >= static_cast<std::size_t>(submap_budget)) break;
     if (simS() >= max_sim_s) {
       end_reason = "time_limit";
       break;
     }
-    if (simulation.vehicle().waypointsLeft() > 0) {
-      stalled = 0;
-      continue;
+    in.stamp_ns = simulation.stampNs();
+    in.T_world_vehicle = estimatedPose();
+    in.vehicle_idle = simulation.vehicle().waypointsLeft() == 0;
+    in.n_submaps = nSubmaps();
+    // The map is fetched (merges synchronised, or the baseline's copy made) only when the step plans;
+    // that time is the map update's, not the plan's.
+    std::shared_ptr<const map::MergedMap> planned_on;
+    double map_s = 0.0, map_cpu_s = 0.0;
+    in.map = [&]() -> vog::Result<std::shared_ptr<const map::MergedMap>> {
+      const vog::bench::Stopwatch fetch;
+      const double cpu = threadCpuS();
+      auto snap = snapshot();
+      map_s += fetch.seconds();
+      map_cpu_s += threadCpuS() - cpu;
+      if (snap) planned_on = *snap;
+      return snap;
+    };
+    if (mode == Mode::kVogLc && in.vehicle_idle) {
+      if (closure_pairs.size() != pipeline.closures().size()) closure_pairs = slam::closurePairs(pipeline.closures());
+      in.submaps = &pipeline.submaps();
+      in.closures = &closure_pairs;
     }
-    if (returning) {
-      end_reason = "complete";
-      break;
-    }
-    auto snap = snapshot();
-    if (!snap) return fail("map snapshot: " + snap.error().message);
     const vog::bench::Stopwatch w;
     const double cpu0 = threadCpuS();
-    if (mode == Mode::kVogLc) {
-      std::vector<plan::Waypoint> views;
-      for (const Pose3& T : revisit.due(pipeline.submaps(), slam::closurePairs(pipeline.closures()),
-                                        estimatedPose().translation(), simulation.stampNs()))
-        views.push_back(toWaypoint(T));
-      if (!views.empty()) planner.requestRevisit(std::move(views));
+    auto out = controller.step(in);
+    const double ms = 1e3 * (w.seconds() - map_s);
+    if (!out) return fail("exploration: " + out.error().message);
+    if (out->plan) {
+      const plan::PlanResult& r = *out->plan;
+      plan_cpu_ms_all.push_back(1e3 * (threadCpuS() - cpu0 - map_cpu_s));
+      plan_ms_all.push_back(ms);
+      IterationRow row;
+      row.iteration = static_cast<int>(iterations.size());
+      row.sim_s = simS();
+      row.n_submaps = nSubmaps();
+      row.plan_ms = ms;
+      row.status = plan::toString(r.status);
+      row.best_gain = r.best_gain;
+      row.tree_size = r.tree_size;
+      row.global_goal = r.global_goal;
+      row.global_candidates = r.global_candidates;
+      if (const auto& tree = controller.planner()->lastTree(); !tree.empty())
+        row.root_shift_m = (tree.front().w.p_world - estimatedPose().translation()).norm();
+      if (row.iteration % coverage_every == 0) {
+        const vog::bench::Stopwatch coverage_time;
+        row.coverage = vog::bench::coverageOf(*planned_on, observable->points.points, 2 * grid_config.resolution_m);
+        evaluation_s += coverage_time.seconds();
+      }
+      iterations.push_back(row);
     }
-    auto r = planner.plan(*snap, toWaypoint(estimatedPose()));
-    const double ms = 1e3 * w.seconds();
-    plan_cpu_ms_all.push_back(1e3 * (threadCpuS() - cpu0));
-    if (!r) return fail("planner: " + r.error().message);
-    plan_ms_all.push_back(ms);
-    IterationRow row;
-    row.iteration = static_cast<int>(iterations.size());
-    row.sim_s = simS();
-    row.n_submaps = nSubmaps();
-    row.plan_ms = ms;
-    row.status = plan::toString(r->status);
-    row.best_gain = r->best_gain;
-    row.tree_size = r->tree_size;
-    row.global_goal = r->global_goal;
-    row.global_candidates = r->global_candidates;
-    if (!planner.lastTree().empty())
-      row.root_shift_m = (planner.lastTree().front().w.p_world - estimatedPose().translation()).norm();
-    if (row.iteration % coverage_every == 0) {
-      const vog::bench::Stopwatch coverage_time;
-      row.coverage = vog::bench::coverageOf(**snap, observable->points.points, 2 * grid_config.resolution_m);
-      evaluation_s += coverage_time.seconds();
-    }
-    iterations.push_back(row);
-    if (r->status == plan::PlanStatus::kNoPath) {
-      end_reason = "no_path: " + r->reason;
+    if (controller.ending() != explore::Ending::kNone) {
+      end_reason = controller.ending() == explore::Ending::kNoPath ? controller.summary()
+                                                                  : explore::toString(controller.ending());
       break;
     }
-    if (r->status == plan::PlanStatus::kComplete) returning = true;
-    if (r->waypoints.empty() || ++stalled > 50) {
-      end_reason = "stalled";
-      break;
-    }
-    std::vector<plan::Waypoint> wps = r->waypoints;
-    if (!root_first && row.root_shift_m > 0.0 && wps.size() > 1) wps.erase(wps.begin());
-    if (auto st = sendWaypoints(wps); !st) return fail(st.error().message);
+    if (out->waypoints)
+      if (auto st = sendWaypoints(*out->waypoints); !st) return fail(st.error().message);
   }
-
   // Final map and evaluation.
   if (mode != Mode::kBaseline) {
     auto u = pipeline.finish();
@@ -706,7 +698,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
   out.add("merge_wait_ms_p95", merge_wait_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_wait_ms_all, 0.95));
   out.add("collisions", static_cast<std::int64_t>(collisions));
-  out.add("revisits", static_cast<std::int64_t>(revisit.revisits()));
+  out.add("revisits", static_cast<std::int64_t>(controller.revisits()));
   out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
   std::cout << out.str();
   return 0;

@@ -3,6 +3,7 @@
 #include "vog/app/scan_record.hpp"
 #include "vog/app/device_source.hpp"
 #include "vog/app/sim_source.hpp"
+#include "vog/app/watchdog.hpp"
 #include "vog/map/voxel_key.hpp"
 
 #include <asio/executor_work_guard.hpp>
@@ -16,7 +17,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <numbers>
 #include <sstream>
 
 namespace vog::app {
@@ -50,7 +50,6 @@ mission::MissionCommandKind toMission(api::MissionCommand::Kind k) {
   return mission::MissionCommandKind::kAbort;
 }
 
-plan::Waypoint toWaypoint(const Pose3& T) { return {T.translation(), geometry::yawOf(T.linear())}; }
 Pose3 fromWaypoint(const Eigen::Vector3d& p, double yaw) {
   return geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0.0, 0.0, yaw);
 }
@@ -132,6 +131,15 @@ Status Daemon::init() {
   if (!pipeline) return Error{"mapping: " + pipeline.error().message};
   pipeline_ = std::move(pipeline).value();
 
+  explore::ExplorationConfig ec;
+  ec.planner = config_.planner;
+  ec.revisits = config_.mapping.loop_closures;
+  ec.revisit = config_.revisit;
+  ec.max_submaps = config_.mission.max_submaps;
+  auto controller = explore::ExplorationController::create(ec);
+  if (!controller) return Error{"exploration: " + controller.error().message};
+  controller_ = std::move(controller).value();
+
   if (resume.state) {
     const mission::MissionState s = resume.state->state;
     mission_ = mission::MissionControl(mission::Box{config_.mission.box_min_m, config_.mission.box_max_m}, s);
@@ -141,31 +149,25 @@ Status Daemon::init() {
   }
   std::optional<Pose3> sim_start;
   if (resumed) {
+    // The vehicle is taken to be at the last waypoint sent (where its controller held it) or, without
+    // one, at the newest submap's base.
     const slam::SubmapRecord& last = pipeline_->submaps().back();
-    T_map_resume_ = resume.waypoint ? fromWaypoint(Eigen::Vector3d(resume.waypoint->x_m, resume.waypoint->y_m,
-                                                                   resume.waypoint->z_m),
-                                                   resume.waypoint->yaw_rad)
-                                    : last.T_world_base;
+    const Pose3 T_map_resume = resume.waypoint ? fromWaypoint(Eigen::Vector3d(resume.waypoint->x_m, resume.waypoint->y_m,
+                                                                              resume.waypoint->z_m),
+                                                              resume.waypoint->yaw_rad)
+                                               : last.T_world_base;
+    alignment_ = SourceAlignment(T_map_resume, last.T_world_base * last.T_world_base_odom.inverse(), last.last_stamp_ns);
     T_map_home_ = pipeline_->submaps().front().T_world_base;
-    pipeline_last_stamp_ns_ = last.last_stamp_ns;
-    sim_start = geometry::planarPart(*T_map_resume_) * Pose3(Eigen::Translation3d(0, 0, T_map_resume_->translation().z()));
+    sim_start = geometry::planarPart(T_map_resume) * Pose3(Eigen::Translation3d(0, 0, T_map_resume.translation().z()));
     spdlog::info("mission {}: resumed {} submaps, {} loop closures, state {}", mission_dir_.string(),
                  pipeline_->submaps().size(), pipeline_->closures().size(), mission::toString(mission_.state()));
   } else {
     spdlog::info("mission {}: new", mission_dir_.string());
   }
 
-  auto openCsv = [&](std::ofstream& f, const char* name, const char* header) -> Status {
-    const std::filesystem::path file = mission_dir_ / name;
-    const bool fresh = !std::filesystem::exists(file);
-    f.open(file, std::ios::app);
-    if (!f) return Error{"cannot open " + file.string()};
-    if (fresh) f << header << "\n" << std::flush;
-    return {};
-  };
-  if (auto st = openCsv(plans_csv_, "iterations.csv", "iteration,sim_s,n_submaps,plan_ms,status,best_gain,tree_size,coverage"); !st)
-    return st;
-  if (auto st = openCsv(merges_csv_, "merges.csv", "sim_s,n_submaps,merge_ms,remerged"); !st) return st;
+  auto telemetry = TelemetryFiles::open(mission_dir_);
+  if (!telemetry) return telemetry.error();
+  telemetry_ = std::move(telemetry).value();
 
   auto merge = map::MergeWorker::create(grid, config_.merge);
   if (!merge) return Error{"merge: " + merge.error().message};
@@ -203,22 +205,13 @@ Status Daemon::init() {
 
 void Daemon::onOdometry(const OdometrySample& odometry) {
   const std::lock_guard lock(state_mutex_);
-  if (T_map_resume_ && !have_odometry_) {
-    // First sample after a resume. A source with a new frame (the simulator): the vehicle is where
-    // it was last sent, in the old odometry frame. A persistent frame continues as it is.
-    if (!source_->persistentFrame()) {
-      const Pose3 T_oldodom_vehicle = T_map_odom_.inverse() * *T_map_resume_;
-      T_oldodom_newodom_ = geometry::planarPart(T_oldodom_vehicle) * geometry::planarPart(odometry.T_odom_vehicle).inverse();
-    }
-    // A source whose clock restarted (the simulator) continues after the last mapped stamp.
-    const std::int64_t last_ns = pipeline_last_stamp_ns_;
-    if (odometry.stamp_ns <= last_ns) stamp_offset_ns_ = last_ns - odometry.stamp_ns + 1'000'000'000;
-    if (stamp_offset_ns_ != 0) spdlog::info("source clock restarted: stamps shifted by {} ns", stamp_offset_ns_);
+  if (!have_odometry_) {
+    alignment_.firstSample(odometry, source_->persistentFrame());
+    if (alignment_.stampOffsetNs() != 0)
+      spdlog::info("source clock restarted: stamps shifted by {} ns", alignment_.stampOffsetNs());
   }
   have_odometry_ = true;
-  odometry_ = odometry;
-  odometry_.stamp_ns += stamp_offset_ns_;
-  if (T_oldodom_newodom_) odometry_.T_odom_vehicle = *T_oldodom_newodom_ * odometry.T_odom_vehicle;
+  odometry_ = alignment_.align(odometry);
 }
 
 bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_world_vehicle_true) {
@@ -228,11 +221,10 @@ bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_w
     ++scans_not_mapped_;
     return !stopping_.load();
   }
-  slam::ScanInput aligned = scan;
+  slam::ScanInput aligned;
   {
     const std::lock_guard lock(state_mutex_);
-    if (T_oldodom_newodom_) aligned.T_world_vehicle_odom = *T_oldodom_newodom_ * scan.T_world_vehicle_odom;
-    aligned.scan.stamp_ns += stamp_offset_ns_;
+    aligned = alignment_.align(scan);
   }
   std::unique_lock lock(queue_mutex_);
   queue_cv_.wait(lock, [&] { return queue_.size() < kMaxQueuedScans || stopping_.load(); });
@@ -376,7 +368,7 @@ Pose3 Daemon::estimatedPose() const { return T_map_odom_ * odometry_.T_odom_vehi
 
 Pose3 Daemon::mapFromSource() const {
   const std::lock_guard lock(state_mutex_);
-  return T_map_odom_ * (T_oldodom_newodom_ ? *T_oldodom_newodom_ : Pose3::Identity());
+  return T_map_odom_ * alignment_.T_oldodom_newodom();
 }
 
 Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns) {
@@ -406,42 +398,40 @@ void Daemon::recordStateLocked(mission::MissionState state) {
   if (auto st = store_->onState({odometry_.stamp_ns, state}); !st) spdlog::error("mission store: {}", st.error().message);
 }
 
-std::optional<std::vector<plan::Waypoint>> Daemon::pathHome(const std::shared_ptr<const map::MergedMap>& snapshot) {
-  Pose3 T_now;
-  {
-    const std::lock_guard lock(state_mutex_);
-    T_now = estimatedPose();
+void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& reason) {
+  switch (event) {
+    case mission::MissionEvent::kExplorationDone:
+      spdlog::info("planner: exploration ends ({}); returning home", reason);
+      break;
+    case mission::MissionEvent::kArrivedHome:
+      break;
+    case mission::MissionEvent::kNoPath:
+      spdlog::warn("planner: {}", reason);
+      mission_.setAbortReason(reason);
+      break;
   }
-  // A planning pass brings the planner's traversability grid up to this snapshot.
-  if (auto r = planner_->plan(snapshot, toWaypoint(T_now)); !r) return std::nullopt;
-  const plan::TraversabilityGrid* grid = planner_->traversability();
-  if (grid == nullptr) return std::nullopt;
-  auto path = grid->findPath(T_now.translation(), T_map_home_.translation());
-  if (!path) {
-    spdlog::warn("planner: no way home: {}", path.error().message);
-    return std::nullopt;
+  recordStateLocked(mission_.event(event));
+}
+
+std::shared_ptr<const map::MergedMap> Daemon::planningSnapshot() {
+  if (config_.source == Source::kSim && config_.sim.speedup == 0.0) {
+    // As fast as possible: simulated time stands still while the vehicle waits, so the planner can
+    // see every scan taken so far mapped and merged, as in a lockstep run.
+    std::unique_lock lock(queue_mutex_);
+    queue_cv_.wait(lock, [&] { return scans_unmapped_ == 0 || stopping_.load(); });
+    lock.unlock();
+    if (stopping_ || !merge_->waitIdle()) return nullptr;
   }
-  // Keep the heading while travelling, then turn to the home heading in steps the vehicle may take.
-  std::vector<plan::Waypoint> out;
-  double yaw = geometry::yawOf(T_now.linear());
-  for (std::size_t i = 1; i < path->size(); ++i) out.push_back({(*path)[i], yaw});
-  const double home_yaw = geometry::yawOf(T_map_home_.linear());
-  const double step = config_.planner.max_heading_change_rad;
-  while (std::abs(geometry::wrapAngle(home_yaw - yaw)) > 1e-9) {
-    yaw = geometry::wrapAngle(yaw + std::clamp(geometry::wrapAngle(home_yaw - yaw), -step, step));
-    out.push_back({T_map_home_.translation(), yaw});
-  }
-  if (out.empty()) out.push_back(toWaypoint(T_map_home_));
-  return out;
+  return merge_->snapshot();
 }
 
 void Daemon::planningLoop() {
   while (!stopping_) {
     ++planning_beat_;
-    bool start_now = false, returning = false, home_sent = false;
-    std::size_t n_submaps = 0;
-    Pose3 T_now;
-    std::int64_t stamp = 0;
+    bool start_now = false, hold_now = false, returning = false;
+    std::uint64_t commands = 0;
+    mission::Box box;
+    explore::StepInput in;
     std::shared_ptr<const std::vector<slam::SubmapRecord>> records;
     std::shared_ptr<const std::vector<slam::ClosurePair>> closures;
     {
@@ -455,143 +445,74 @@ void Daemon::planningLoop() {
       }
       // A mission starts once navigation is up: its home and first waypoints are the vehicle's pose.
       start_now = have_odometry_ && std::exchange(mission_started_, false);
+      hold_now = std::exchange(hold_requested_, false);
       returning = mission_.state() == mission::MissionState::kReturning;
-      home_sent = home_path_sent_;
-      n_submaps = submap_infos_ ? submap_infos_->size() : 0;
-      T_now = estimatedPose();
-      stamp = odometry_.stamp_ns;
+      commands = commands_;
+      box = *mission_.box();  // exploring needs a box (MissionControl)
+      in.n_submaps = submap_infos_ ? submap_infos_->size() : 0;
+      in.T_world_vehicle = estimatedPose();
+      in.stamp_ns = odometry_.stamp_ns;
       records = submap_records_;
       closures = closure_pairs_;
     }
     if (start_now) {
-      if (n_submaps == 0) T_map_home_ = T_now;  // home is where a new mission starts
-      plan::PlannerConfig pc = config_.planner;
-      const mission::Box box = *mission_.box();
-      pc.box_min_world_m = box.min_world_m;
-      pc.box_max_world_m = box.max_world_m;
-      auto planner = plan::NbvPlanner::create(pc, toWaypoint(T_map_home_));
-      if (!planner) {
-        spdlog::error("planner: {}", planner.error().message);
+      if (in.n_submaps == 0) T_map_home_ = in.T_world_vehicle;  // home is where a new mission starts
+      if (auto st = controller_->start(T_map_home_, box, in.stamp_ns, in.n_submaps == 0); !st) {
         const std::lock_guard lock(state_mutex_);
-        mission_.setAbortReason("planner: " + planner.error().message);
-        recordStateLocked(mission_.event(mission::MissionEvent::kNoPath));
-        continue;
-      }
-      planner_ = std::move(planner).value();
-      revisit_.reset();
-      if (config_.mapping.loop_closures) {
-        auto revisit = slam::RevisitPolicy::create(config_.revisit, stamp);
-        if (!revisit) {
-          fail("revisit", revisit.error());
-          continue;
-        }
-        revisit_ = std::move(revisit).value();
-      }
-      if (n_submaps == 0) {
-        // A full turn on the spot first: the vertical fan sees nothing ahead until it has swept around,
-        // and the planner needs known free space to grow its tree in.
-        std::vector<plan::Waypoint> spin;
-        const double yaw0 = geometry::yawOf(T_now.linear());
-        for (int k = 1; k <= 4; ++k) spin.push_back({T_now.translation(), geometry::wrapAngle(yaw0 + k * std::numbers::pi / 2)});
-        if (auto st = sendWaypoints(spin, stamp); !st) fail("waypoints", st.error());
+        applyEventLocked(mission::MissionEvent::kNoPath, "planner: " + st.error().message);
         continue;
       }
     }
-    if (auto stopped = source_->takeObstruction(); stopped && planner_) {
+    if (!controller_->active()) {
+      // Ended while a command held the mission (its event was not applied then): end it now.
+      if (const auto event = controller_->endingEvent()) {
+        const std::lock_guard lock(state_mutex_);
+        applyEventLocked(*event, controller_->summary());
+      }
+      continue;
+    }
+    if (hold_now) controller_->hold();
+    if (returning) controller_->returnHome();  // the operator's word, or a mission resumed on its way home
+    if (auto stopped = source_->takeObstruction()) {
       const Pose3 T_map_source = mapFromSource();
-      const Eigen::Vector3d p = T_map_source * stopped->p_odom_m;
-      if (auto back = planner_->reportObstruction(p, T_map_source * stopped->target_odom_m))
-        spdlog::warn("planner: the vehicle was stopped short at ({:.2f}, {:.2f}, {:.2f}); backing off to ({:.2f}, {:.2f}, "
-                     "{:.2f})",
-                     p.x(), p.y(), p.z(), back->x(), back->y(), back->z());
+      in.obstruction = explore::Obstruction{T_map_source * stopped->p_odom_m, T_map_source * stopped->target_odom_m};
+      spdlog::warn("planner: the vehicle was stopped short at ({:.2f}, {:.2f}, {:.2f}); backing off",
+                   in.obstruction->p_world.x(), in.obstruction->p_world.y(), in.obstruction->p_world.z());
     }
-    if (!planner_ || !source_->idle()) {
-      const std::lock_guard lock(state_mutex_);
-      planner_state_ = api::PlannerState::kFollowing;
-      continue;
-    }
-    if (returning && home_sent) {
-      const std::lock_guard lock(state_mutex_);
-      const mission::MissionState s = mission_.event(mission::MissionEvent::kArrivedHome);
-      home_path_sent_ = false;
-      recordStateLocked(s);
-      continue;
-    }
-    if (config_.source == Source::kSim && config_.sim.speedup == 0.0) {
-      // As fast as possible: simulated time stands still while the vehicle waits, so the planner can
-      // see every scan taken so far mapped and merged, as in a lockstep run.
-      std::unique_lock lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return scans_unmapped_ == 0 || stopping_.load(); });
-      lock.unlock();
-      if (stopping_ || !merge_->waitIdle()) continue;
-    }
-    auto snapshot = merge_->snapshot();
-    if (!snapshot) continue;  // the first submap is not merged yet
-    {
+    in.vehicle_idle = source_->idle();
+    in.map = [this]() -> Result<std::shared_ptr<const map::MergedMap>> { return planningSnapshot(); };
+    in.submaps = records.get();
+    in.closures = closures.get();
+    if (in.vehicle_idle || in.obstruction) {
       const std::lock_guard lock(state_mutex_);
       planner_state_ = api::PlannerState::kPlanning;
     }
-    if (!returning && n_submaps >= static_cast<std::size_t>(config_.mission.max_submaps)) {
-      spdlog::info("planner: submap budget of {} reached", config_.mission.max_submaps);
-      const std::lock_guard lock(state_mutex_);
-      recordStateLocked(mission_.event(mission::MissionEvent::kExplorationDone));
-      continue;  // the next pass takes the way home
-    }
-    if (returning) {
-      auto home = pathHome(snapshot);
-      {
-        const std::lock_guard lock(state_mutex_);
-        if (!home) {
-          mission_.setAbortReason("no collision-free way home");
-          recordStateLocked(mission_.event(mission::MissionEvent::kNoPath));
-          continue;
-        }
-        home_path_sent_ = true;
-        planner_state_ = api::PlannerState::kFollowing;
-      }
-      if (auto st = sendWaypoints(*home, stamp); !st) fail("waypoints", st.error());
-      continue;
-    }
-    if (revisit_ && records && closures) {
-      std::vector<plan::Waypoint> views;
-      for (const Pose3& T : revisit_->due(*records, *closures, T_now.translation(), stamp)) views.push_back(toWaypoint(T));
-      if (!views.empty()) {
-        spdlog::info("planner: no loop closure to the older map for {:.0f} s; revisiting an old view",
-                     config_.revisit.after_s);
-        planner_->requestRevisit(std::move(views));
-      }
-    }
     const Clock::time_point t0 = Clock::now();
-    auto result = planner_->plan(snapshot, toWaypoint(T_now));
+    auto out = controller_->step(in);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    if (!result) {
-      spdlog::warn("planner: {}", result.error().message);
+    if (!out) {
       const std::lock_guard lock(state_mutex_);
-      mission_.setAbortReason("planner: " + result.error().message);
-      recordStateLocked(mission_.event(mission::MissionEvent::kNoPath));
+      applyEventLocked(mission::MissionEvent::kNoPath, "planner: " + out.error().message);
       continue;
     }
-    spdlog::debug("planner: {} in {:.1f} ms, tree {}, gain {:.1f}", plan::toString(result->status), ms,
-                  result->tree_size, result->best_gain);
-    plans_csv_ << plan_iteration_++ << ',' << 1e-9 * static_cast<double>(stamp) << ',' << n_submaps << ',' << ms << ','
-               << plan::toString(result->status) << ',' << result->best_gain << ',' << result->tree_size << ",\n"
-               << std::flush;
-    if (result->status == plan::PlanStatus::kNoPath) {
-      spdlog::warn("planner: no path: {}", result->reason);
-      (void)source_->setWaypoints({});
-      const std::lock_guard lock(state_mutex_);
-      mission_.setAbortReason("no path: " + result->reason);
-      recordStateLocked(mission_.event(mission::MissionEvent::kNoPath));
-      continue;
+    if (out->plan) {
+      const plan::PlanResult& r = *out->plan;
+      spdlog::debug("planner: {} in {:.1f} ms, tree {}, gain {:.1f}", plan::toString(r.status), ms, r.tree_size,
+                    r.best_gain);
+      telemetry_->plan(in.stamp_ns, in.n_submaps, ms, r);
     }
-    if (result->status == plan::PlanStatus::kComplete) {
-      spdlog::info("planner: exploration complete ({}); returning home", result->reason);
+    bool send = false;
+    {
       const std::lock_guard lock(state_mutex_);
-      recordStateLocked(mission_.event(mission::MissionEvent::kExplorationDone));
-      if (mission_.state() != mission::MissionState::kReturning) continue;  // paused or aborted meanwhile
-      home_path_sent_ = true;
+      if (out->event) applyEventLocked(*out->event, out->reason);
+      // A command accepted meanwhile (pause, abort, return home) overrides this step's waypoints.
+      send = out->waypoints && commands == commands_ && (mission_.active() || out->waypoints->empty());
+      if (mission_.active())
+        planner_state_ = (send && !out->waypoints->empty()) || !in.vehicle_idle ? api::PlannerState::kFollowing
+                                                                                 : api::PlannerState::kPlanning;
     }
-    if (auto st = sendWaypoints(result->waypoints, stamp); !st) fail("waypoints", st.error());
+    if (send)
+      if (auto st = sendWaypoints(*out->waypoints, in.stamp_ns); !st) fail("waypoints", st.error());
   }
 }
 
@@ -661,24 +582,16 @@ Status Daemon::run() {
 
   // Watchdog: WATCHDOG=1 only while every thread has beaten within the limit; a stuck thread lets
   // systemd restart the daemon (and the mission resumes from its directory).
-  struct Beat {
-    const char* name;
-    std::function<std::uint64_t()> read;
-    std::uint64_t last = 0;
-    Clock::time_point changed = Clock::now();
-  };
-  std::vector<Beat> beats = {
-      {"io", [this] { return io_beat_.load(); }},
-      {"mapping", [this] { return mapping_beat_.load(); }},
-      {"merge", [this] { return merge_->heartbeat(); }},
-      {"planning", [this] { return planning_beat_.load(); }},
-      {"source", [this] { return source_->heartbeat(); }},
-  };
   const auto interval = notifier_.watchdogInterval();
-  const Clock::duration stall_limit =
-      interval ? std::chrono::duration_cast<Clock::duration>(*interval) : Clock::duration(std::chrono::seconds(10));
+  Watchdog watchdog(interval ? std::chrono::duration_cast<Clock::duration>(*interval)
+                             : Clock::duration(std::chrono::seconds(10)));
+  const Clock::time_point t_start = Clock::now();
+  watchdog.add("io", [this] { return io_beat_.load(); }, t_start);
+  watchdog.add("mapping", [this] { return mapping_beat_.load(); }, t_start);
+  watchdog.add("merge", [this] { return merge_->heartbeat(); }, t_start);
+  watchdog.add("planning", [this] { return planning_beat_.load(); }, t_start);
+  watchdog.add("source", [this] { return source_->heartbeat(); }, t_start);
   Clock::time_point last_ping{}, last_status{}, last_pose{};
-  bool stall_reported = false;
   while (true) {
     {
       std::unique_lock lock(stop_mutex_);
@@ -686,30 +599,23 @@ Status Daemon::run() {
       if (stop_requested_) break;
     }
     const Clock::time_point now = Clock::now();
-    bool alive = true;
-    for (Beat& b : beats) {
-      const std::uint64_t v = b.read();
-      if (v != b.last) {
-        b.last = v;
-        b.changed = now;
-      } else if (now - b.changed > stall_limit) {
-        alive = false;
-        if (!stall_reported)
-          spdlog::error("watchdog: the {} thread has not reported for {} s", b.name,
-                        std::chrono::duration_cast<std::chrono::seconds>(now - b.changed).count());
-        stall_reported = true;
-      }
-    }
-    if (alive && interval && now - last_ping >= *interval / 2) {
+    const Watchdog::Check check = watchdog.check(now);
+    for (const std::string& stalled : check.newly_stalled)
+      spdlog::error("watchdog: the {} thread has not reported", stalled);
+    if (check.alive && interval && now - last_ping >= *interval / 2) {
       notifier_.watchdog();
       last_ping = now;
     }
     if (auto st = source_->failure(); !st) fail("source", st.error());
     if (auto e = merge_->error()) fail("merge", *e);
-    for (const map::MergeRecord& m : merge_->takeRecords()) {
-      const std::lock_guard lock(state_mutex_);
-      merges_csv_ << 1e-9 * static_cast<double>(odometry_.stamp_ns) << ',' << m.n_submaps << ',' << m.merge_ms << ','
-                  << m.stats.remerged << '\n' << std::flush;
+    const std::vector<map::MergeRecord> merges = merge_->takeRecords();
+    if (!merges.empty()) {
+      std::int64_t stamp_ns = 0;
+      {
+        const std::lock_guard lock(state_mutex_);
+        stamp_ns = odometry_.stamp_ns;
+      }
+      for (const map::MergeRecord& m : merges) telemetry_->merge(stamp_ns, m);
     }
     if (now - last_pose >= std::chrono::milliseconds(200)) {
       api::PoseUpdate p;
@@ -817,21 +723,18 @@ Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
     switch (command.kind) {
       case api::MissionCommand::Kind::kStart:
         mission_started_ = true;
-        home_path_sent_ = false;
         break;
       case api::MissionCommand::Kind::kPause:
       case api::MissionCommand::Kind::kAbort:
-        hold = true;
-        home_path_sent_ = false;
-        break;
       case api::MissionCommand::Kind::kReturnHome:
-        hold = true;
-        home_path_sent_ = false;
+        hold = true;  // the vehicle stops; the planning thread plans again when the mission moves
+        hold_requested_ = true;
         break;
       case api::MissionCommand::Kind::kSetBox:
       case api::MissionCommand::Kind::kResume:
         break;
     }
+    ++commands_;
     recordStateLocked(*r);
     out = toApi(*r);
   }

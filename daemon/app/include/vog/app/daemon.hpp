@@ -6,8 +6,9 @@
 //   mapping   scans -> MappingPipeline (submaps, loop closures, optimisation); every closed submap is
 //             made durable (MissionStore: .ot + journal group, fsync) before the merge hears of it
 //   merge     MergeWorker: keeps the merged map current and publishes immutable snapshots
-//   planning  mission state machine + NBV planner on the newest snapshot; waypoints to the vehicle,
-//             the API and the journal
+//   planning  the mission's closed loop (explore::ExplorationController: spin, NBV plans on the newest
+//             snapshot, revisits, obstructions, the way home, the ending), the mission state machine
+//             fed by its events; waypoints to the vehicle, the API and the journal
 //   main      run(): systemd notify (READY, WATCHDOG while every thread beats, STOPPING) and status
 // Queues: source -> mapping (bounded; the source waits when mapping is behind), mapping -> merge
 // (coalescing), merge -> planning/API (snapshots). Slow API clients never block any of them (the
@@ -15,12 +16,11 @@
 //
 // Frames: the planner works in the map frame (the optimised estimate); the vehicle steers in its odometry
 // frame. T_map_odom comes from the newest submap (its optimised base pose times the inverse of its
-// odometry base pose). After a restart the new odometry frame is aligned to the old one at the first
-// odometry sample: the vehicle is taken to be at the last waypoint sent (where its controller held it)
-// or, without one, at the newest submap's base.
+// odometry base pose). After a restart SourceAlignment brings the source's new frame and clock into
+// the mission's.
 //
-// Telemetry: iterations.csv (one row per planning iteration) and merges.csv (one row per merge) in
-// the mission folder, the columns of `vog-bench mission --out` so scripts/plot-mission draws them.
+// Parts with their own state: ExplorationController (the loop's policy), SourceAlignment,
+// TelemetryFiles (iterations.csv, merges.csv) and Watchdog (thread heartbeats for systemd).
 //
 // Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
 // until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
@@ -28,14 +28,16 @@
 
 #include "vog/api/api_server.hpp"
 #include "vog/api/domain.hpp"
+#include "vog/app/source_alignment.hpp"
 #include "vog/app/systemd_notify.hpp"
+#include "vog/app/telemetry.hpp"
 #include "vog/app/vehicle_source.hpp"
 #include "vog/app/vogd_config.hpp"
+#include "vog/explore/exploration_controller.hpp"
 #include "vog/map/merge_worker.hpp"
 #include "vog/mission/mission_control.hpp"
 #include "vog/mission/mission_store.hpp"
 #include "vog/mission/raw_log.hpp"
-#include "vog/plan/nbv_planner.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
 #include "vog/slam/revisit_policy.hpp"
 
@@ -45,7 +47,6 @@
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -103,8 +104,12 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
   // Logs and journals a mission state; the caller holds state_mutex_.
   void recordStateLocked(mission::MissionState state);
+  // Applies an event of the exploration (with its reason for kNoPath); the caller holds state_mutex_.
+  void applyEventLocked(mission::MissionEvent event, const std::string& reason);
+  // The merged map the planner plans on; as fast as possible (simulator, speedup 0) it first waits
+  // until every scan taken so far is mapped and merged, as in a lockstep run. Planning thread.
+  std::shared_ptr<const map::MergedMap> planningSnapshot();
   void fail(const std::string& where, const Error& error);
-  std::optional<std::vector<plan::Waypoint>> pathHome(const std::shared_ptr<const map::MergedMap>& snapshot);
 
   const VogdConfig config_;
   const DaemonOptions options_;
@@ -122,8 +127,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::uint64_t scans_not_mapped_ = 0;                // outside a mission, guarded by queue_mutex_
   std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
-  std::unique_ptr<plan::NbvPlanner> planner_;         // planning thread
-  std::optional<slam::RevisitPolicy> revisit_;        // planning thread; with loop closures only
+  std::optional<explore::ExplorationController> controller_;  // planning thread
   std::unique_ptr<VehicleSource> source_;
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
@@ -143,13 +147,11 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   mutable std::mutex state_mutex_;
   std::condition_variable planner_cv_;
   mission::MissionControl mission_;
-  bool mission_started_ = false;           // the planner must (re)initialise for a new start
-  bool home_path_sent_ = false;            // returning: the way home was handed to the vehicle
+  bool mission_started_ = false;           // the controller must (re)start for a new mission
+  bool hold_requested_ = false;            // a command stopped the vehicle; the controller plans again
+  std::uint64_t commands_ = 0;             // mission commands accepted (a step's waypoints older than one are dropped)
   api::PlannerState planner_state_ = api::PlannerState::kIdle;
-  std::optional<geometry::Pose3> T_oldodom_newodom_;  // resume alignment, set at the first odometry sample
-  std::optional<geometry::Pose3> T_map_resume_;       // where the vehicle is taken to be at a resume
-  std::int64_t pipeline_last_stamp_ns_ = 0;           // newest mapped stamp at a resume
-  std::int64_t stamp_offset_ns_ = 0;                  // added to a restarted source's stamps
+  SourceAlignment alignment_;                          // a resumed source's frame and clock
   bool have_odometry_ = false;                         // a sample arrived since launch
   OdometrySample odometry_;                            // newest, aligned
   geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
@@ -164,11 +166,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::uint64_t mapping_errors_ = 0;
   geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();
 
-  // Telemetry next to the mission (mission_dir/iterations.csv, merges.csv): one row per planning
-  // iteration (planning thread) and per merge (main thread).
-  std::ofstream plans_csv_;
-  std::ofstream merges_csv_;
-  int plan_iteration_ = 0;
+  std::unique_ptr<TelemetryFiles> telemetry_;  // iterations.csv (planning thread), merges.csv (main thread)
 
   // Threads and their heartbeats.
   std::atomic<bool> stopping_{false};

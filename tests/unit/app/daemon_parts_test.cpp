@@ -1,0 +1,124 @@
+// The parts of vogd's daemon that own their own state, without threads: the resumed source's
+// alignment and the thread watchdog.
+#include "vog/app/source_alignment.hpp"
+#include "vog/app/watchdog.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+
+namespace vog::app {
+namespace {
+
+using geometry::Pose3;
+
+OdometrySample sample(std::int64_t stamp_ns, const Pose3& T) {
+  OdometrySample s;
+  s.stamp_ns = stamp_ns;
+  s.T_odom_vehicle = T;
+  return s;
+}
+
+void expectPosesNear(const Pose3& a, const Pose3& b, double tol = 1e-9) {
+  EXPECT_LT((a.translation() - b.translation()).norm(), tol) << a.translation().transpose() << " vs "
+                                                             << b.translation().transpose();
+  EXPECT_LT((a.linear() - b.linear()).norm(), tol);
+}
+
+TEST(SourceAlignment, ANewMissionChangesNothing) {
+  SourceAlignment a;
+  const Pose3 T = geometry::poseFromXyzRpy(1.0, 2.0, -3.0, 0.1, -0.05, 0.7);
+  a.firstSample(sample(5, T), false);
+  const OdometrySample s = a.align(sample(7, T));
+  EXPECT_EQ(s.stamp_ns, 7);
+  EXPECT_EQ(s.T_odom_vehicle.matrix(), T.matrix());
+  slam::ScanInput scan;
+  scan.scan.stamp_ns = 9;
+  scan.T_world_vehicle_odom = T;
+  EXPECT_EQ(a.align(scan).scan.stamp_ns, 9);
+  EXPECT_EQ(a.align(scan).T_world_vehicle_odom.matrix(), T.matrix());
+}
+
+TEST(SourceAlignment, ARestartedSourceContinuesWhereTheVehicleWasAndAfterTheLastStamp) {
+  // The old odometry frame sat at (2, -1) turned 0.4 rad in the map; the vehicle was held at
+  // (3, 1, -2) heading 1.2 rad; the last mapped stamp was 500 s.
+  const Pose3 T_map_oldodom = geometry::poseFromXyzRpy(2.0, -1.0, 0.0, 0.0, 0.0, 0.4);
+  const Pose3 T_map_vehicle = geometry::poseFromXyzRpy(3.0, 1.0, -2.0, 0.0, 0.0, 1.2);
+  const std::int64_t last_ns = 500'000'000'000;
+  SourceAlignment a(T_map_vehicle, T_map_oldodom, last_ns);
+  // The simulator restarts at its own origin and clock; depth, roll and pitch are measured.
+  const Pose3 first = geometry::poseFromXyzRpy(0.0, 0.0, -2.1, 0.02, -0.01, 0.0);
+  a.firstSample(sample(1'000'000'000, first), false);
+  const OdometrySample s0 = a.align(sample(1'000'000'000, first));
+  const Pose3 T_map_first = T_map_oldodom * s0.T_odom_vehicle;
+  EXPECT_NEAR(T_map_first.translation().x(), 3.0, 1e-9);
+  EXPECT_NEAR(T_map_first.translation().y(), 1.0, 1e-9);
+  EXPECT_NEAR(T_map_first.translation().z(), -2.1, 1e-9);  // the measured depth, not the held one
+  const Eigen::Vector3d rpy = geometry::rpyFromRotation(T_map_first.linear());
+  EXPECT_NEAR(rpy.x(), 0.02, 1e-9);
+  EXPECT_NEAR(rpy.y(), -0.01, 1e-9);
+  EXPECT_NEAR(rpy.z(), 1.2, 1e-9);
+  EXPECT_EQ(s0.stamp_ns, last_ns + 1'000'000'000);  // one second after the last mapped stamp
+  // Later motion keeps its shape; scans get the same frame and clock.
+  const Pose3 later = geometry::poseFromXyzRpy(1.5, 0.5, -2.0, 0.0, 0.0, 0.3);
+  const OdometrySample s1 = a.align(sample(3'000'000'000, later));
+  expectPosesNear(s0.T_odom_vehicle.inverse() * s1.T_odom_vehicle, first.inverse() * later);
+  EXPECT_EQ(s1.stamp_ns - s0.stamp_ns, 2'000'000'000);
+  slam::ScanInput scan;
+  scan.scan.stamp_ns = 3'000'000'000;
+  scan.T_world_vehicle_odom = later;
+  const slam::ScanInput aligned = a.align(scan);
+  EXPECT_EQ(aligned.scan.stamp_ns, s1.stamp_ns);
+  expectPosesNear(aligned.T_world_vehicle_odom, s1.T_odom_vehicle);
+  // Fixed at the first sample: another "first" sample changes nothing.
+  a.firstSample(sample(0, later), false);
+  expectPosesNear(a.align(sample(0, later)).T_odom_vehicle, s1.T_odom_vehicle);
+}
+
+TEST(SourceAlignment, APersistentFrameAndClockContinueAsTheyAre) {
+  const Pose3 T_map_oldodom = geometry::poseFromXyzRpy(2.0, -1.0, 0.0, 0.0, 0.0, 0.4);
+  const Pose3 T_map_vehicle = geometry::poseFromXyzRpy(3.0, 1.0, -2.0, 0.0, 0.0, 1.2);
+  SourceAlignment a(T_map_vehicle, T_map_oldodom, 500);
+  const Pose3 T = geometry::poseFromXyzRpy(0.5, 0.5, -2.0, 0.0, 0.0, 0.1);
+  a.firstSample(sample(600, T), true);
+  const OdometrySample s = a.align(sample(600, T));
+  EXPECT_EQ(s.stamp_ns, 600);
+  EXPECT_EQ(s.T_odom_vehicle.matrix(), T.matrix());
+  EXPECT_EQ(a.stampOffsetNs(), 0);
+}
+
+TEST(Watchdog, AThreadThatStopsBeatingIsReportedOnceAndAliveAgainWhenItBeats) {
+  using Clock = Watchdog::Clock;
+  std::atomic<std::uint64_t> a{0}, b{0};
+  const Clock::time_point t0{};
+  Watchdog w(std::chrono::seconds(10));
+  w.add("mapping", [&] { return a.load(); }, t0);
+  w.add("planning", [&] { return b.load(); }, t0);
+  // Both beat for 30 s.
+  for (int s = 1; s <= 30; ++s) {
+    ++a;
+    ++b;
+    const Watchdog::Check c = w.check(t0 + std::chrono::seconds(s));
+    EXPECT_TRUE(c.alive);
+    EXPECT_TRUE(c.newly_stalled.empty());
+  }
+  // The planning thread stops: alive until the limit, then stuck, reported once.
+  int reports = 0;
+  for (int s = 31; s <= 60; ++s) {
+    ++a;
+    const Watchdog::Check c = w.check(t0 + std::chrono::seconds(s));
+    EXPECT_EQ(c.alive, s <= 40) << s;
+    for (const std::string& name : c.newly_stalled) {
+      EXPECT_EQ(name.rfind("planning", 0), 0u) << name;
+      ++reports;
+    }
+  }
+  EXPECT_EQ(reports, 1);
+  // It beats again, then stalls again: reported again.
+  ++b;
+  EXPECT_TRUE(w.check(t0 + std::chrono::seconds(61)).alive);
+  EXPECT_EQ(w.check(t0 + std::chrono::seconds(80)).newly_stalled.size(), 2u);  // both stopped now
+}
+
+}  // namespace
+}  // namespace vog::app
