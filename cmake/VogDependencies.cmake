@@ -26,5 +26,4 @@ endif()
 
 if(VOG_BUILD_TESTS)
   find_package(GTest REQUIRED)
-  find_package(benchmark REQUIRED)
 endif()
