@@ -96,10 +96,10 @@ Daemon::Daemon(const VogdConfig& config, const DaemonOptions& options)
 
 Daemon::~Daemon() {
   requestStop();
+  scans_.stop();
   if (source_) source_->stop();
   for (std::thread* t : {&planning_thread_, &mapping_thread_}) {
     if (t->joinable()) {
-      queue_cv_.notify_all();
       planner_cv_.notify_all();
       t->join();
     }
@@ -123,7 +123,7 @@ Status Daemon::init() {
   mission::RawLogContents raw_existing;
   auto raw = mission::RawLog::open(mission_dir_ / mission::MissionStore::kRawLogFile, &raw_existing);
   if (!raw) return Error{"raw log: " + raw.error().message};
-  raw_log_ = std::move(raw).value();
+  raw_ = std::make_unique<RawRecorder>(std::move(raw).value());
 
   const bool resumed = !resume.pipeline.submaps.empty();
   auto pipeline = resumed ? slam::MappingPipeline::restore(config_.mapping, resume.pipeline)
@@ -217,83 +217,41 @@ void Daemon::onOdometry(const OdometrySample& odometry) {
 bool Daemon::onScan(const slam::ScanInput& scan, const std::optional<Pose3>& T_world_vehicle_true) {
   if (config_.source == Source::kDevices && !chunk_gate_) {
     // Outside a mission (idle, complete, aborted) nothing is mapped; the raw log has the bytes.
-    const std::lock_guard lock(queue_mutex_);
-    ++scans_not_mapped_;
-    return !stopping_.load();
+    scans_.skipped();
+    return !scans_.stopped();
   }
   slam::ScanInput aligned;
   {
     const std::lock_guard lock(state_mutex_);
     aligned = alignment_.align(scan);
   }
-  std::unique_lock lock(queue_mutex_);
-  queue_cv_.wait(lock, [&] { return queue_.size() < kMaxQueuedScans || stopping_.load(); });
-  if (stopping_) return false;
-  queue_.push_back({std::move(aligned), T_world_vehicle_true});
-  ++scans_unmapped_;
-  queue_cv_.notify_all();
-  return true;
+  return scans_.push({std::move(aligned), T_world_vehicle_true});
 }
 
 void Daemon::onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) {
-  chunk_gate_ = mappingGate(stamp_ns);
-  recordRaw(device_id, stamp_ns, bytes);
-}
-
-bool Daemon::mappingGate(std::int64_t stamp_ns) {
-  const bool gate = mapping_enabled_.load();
-  if (logged_gate_ != gate) {
-    const std::uint8_t byte = gate ? 1 : 0;
-    recordRaw(kMappingGateDeviceId, stamp_ns, std::span<const std::uint8_t>(&byte, 1));
-    logged_gate_ = gate;
-  }
-  return gate;
-}
-
-void Daemon::recordRaw(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) {
-  const std::lock_guard lock(raw_log_mutex_);
-  if (raw_log_failed_) return;
-  if (Status st = raw_log_->append(device_id, stamp_ns, bytes); !st) {
-    spdlog::error("raw log: {} (recording stops; mapping goes on)", st.error().message);
-    raw_log_failed_ = true;
-  }
-}
-
-Status Daemon::syncRawLog() {
-  const std::lock_guard lock(raw_log_mutex_);
-  return raw_log_->sync();
+  chunk_gate_ = raw_->gate(mapping_enabled_.load(), stamp_ns);
+  raw_->record(device_id, stamp_ns, bytes);
 }
 
 // ---------------------------------------------------------------- mapping thread
 
 void Daemon::mappingLoop() {
-  while (true) {
+  while (!stopping_) {
     ++mapping_beat_;
-    QueuedScan item;
-    {
-      std::unique_lock lock(queue_mutex_);
-      queue_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return !queue_.empty() || stopping_.load(); });
-      if (stopping_) break;
-      if (queue_.empty()) continue;
-      item = std::move(queue_.front());
-      queue_.pop_front();
-      queue_cv_.notify_all();
-    }
-    const slam::ScanInput& scan = item.scan;
-    bool mapped = true;
+    std::optional<QueuedScan> item = scans_.pop(std::chrono::milliseconds(200));
+    if (!item) continue;
+    const slam::ScanInput& scan = item->scan;
     if (config_.source == Source::kSim) {
       // The simulator's "device" output is the scan itself (scan_record.hpp), with its true pose.
-      mapped = mappingGate(scan.scan.stamp_ns);
-      recordRaw(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
-      if (item.T_world_vehicle_true)
-        recordRaw(kSimTruthDeviceId, scan.scan.stamp_ns, encodeTruthRecord({scan.scan.stamp_ns, *item.T_world_vehicle_true}));
-    }
-    if (!mapped) {
-      const std::lock_guard lock(queue_mutex_);
-      ++scans_not_mapped_;
-      --scans_unmapped_;
-      queue_cv_.notify_all();
-      continue;
+      const bool mapped = raw_->gate(mapping_enabled_.load(), scan.scan.stamp_ns);
+      raw_->record(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
+      if (item->T_world_vehicle_true)
+        raw_->record(kSimTruthDeviceId, scan.scan.stamp_ns,
+                     encodeTruthRecord({scan.scan.stamp_ns, *item->T_world_vehicle_true}));
+      if (!mapped) {
+        scans_.done(false);
+        continue;
+      }
     }
     auto update = pipeline_->feed(scan);
     if (!update) {
@@ -305,11 +263,7 @@ void Daemon::mappingLoop() {
         break;
       }
     }
-    {
-      const std::lock_guard lock(queue_mutex_);
-      --scans_unmapped_;
-    }
-    queue_cv_.notify_all();
+    scans_.done(true);
   }
   // The active submap is closed and stored on a clean shutdown, so nothing mapped is lost.
   if (!failure_) {
@@ -320,14 +274,14 @@ void Daemon::mappingLoop() {
       if (auto st = persistUpdate(*update); !st) spdlog::error("mission store at shutdown: {}", st.error().message);
     }
   }
-  if (auto st = syncRawLog(); !st) spdlog::error("raw log: {}", st.error().message);
+  if (auto st = raw_->sync(); !st) spdlog::error("raw log: {}", st.error().message);
 }
 
 Status Daemon::persistUpdate(const slam::MappingUpdate& update) {
   // Durable first (the journal group is the commit), then visible to the merge and the API.
   if (update.closed_submap) {
     if (auto st = store_->onUpdate(*pipeline_, update); !st) return st;
-    if (auto st = syncRawLog(); !st) return st;
+    if (auto st = raw_->sync(); !st) return st;
     spdlog::info("submap {} closed ({} scans){}", *update.closed_submap, pipeline_->submaps().back().n_scans,
                  update.closures.empty() ? "" : ", " + std::to_string(update.closures.size()) + " loop closures");
   }
@@ -417,10 +371,7 @@ std::shared_ptr<const map::MergedMap> Daemon::planningSnapshot() {
   if (config_.source == Source::kSim && config_.sim.speedup == 0.0) {
     // As fast as possible: simulated time stands still while the vehicle waits, so the planner can
     // see every scan taken so far mapped and merged, as in a lockstep run.
-    std::unique_lock lock(queue_mutex_);
-    queue_cv_.wait(lock, [&] { return scans_unmapped_ == 0 || stopping_.load(); });
-    lock.unlock();
-    if (stopping_ || !merge_->waitIdle()) return nullptr;
+    if (!scans_.waitDrained() || !merge_->waitIdle()) return nullptr;
   }
   return merge_->snapshot();
 }
@@ -640,7 +591,7 @@ Status Daemon::run() {
   notifier_.stopping();
   const Clock::time_point t_stop = Clock::now();
   stopping_ = true;
-  queue_cv_.notify_all();
+  scans_.stop();  // releases a source waiting to queue a scan
   planner_cv_.notify_all();
   source_->stop();
   if (planning_thread_.joinable()) planning_thread_.join();
@@ -650,11 +601,8 @@ Status Daemon::run() {
   work.reset();
   asio::post(io_, [this] { io_.stop(); });
   if (io_thread_.joinable()) io_thread_.join();
-  {
-    const std::lock_guard lock(queue_mutex_);
-    spdlog::info("stopped in {} ms ({} scans outside a mission were recorded, not mapped)",
-                 std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count(), scans_not_mapped_);
-  }
+  spdlog::info("stopped in {} ms ({} scans outside a mission were recorded, not mapped)",
+               std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count(), scans_.notMapped());
   const std::lock_guard lock(state_mutex_);
   if (failure_) return *failure_;
   return {};

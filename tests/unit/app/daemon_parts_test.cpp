@@ -1,11 +1,18 @@
 // The parts of vogd's daemon that own their own state, without threads: the resumed source's
 // alignment and the thread watchdog.
+#include "vog/app/raw_recorder.hpp"
+#include "vog/app/scan_queue.hpp"
+#include "vog/app/scan_record.hpp"
 #include "vog/app/source_alignment.hpp"
 #include "vog/app/watchdog.hpp"
+
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <future>
+#include <thread>
 
 namespace vog::app {
 namespace {
@@ -118,6 +125,67 @@ TEST(Watchdog, AThreadThatStopsBeatingIsReportedOnceAndAliveAgainWhenItBeats) {
   ++b;
   EXPECT_TRUE(w.check(t0 + std::chrono::seconds(61)).alive);
   EXPECT_EQ(w.check(t0 + std::chrono::seconds(80)).newly_stalled.size(), 2u);  // both stopped now
+}
+
+QueuedScan scanAt(std::int64_t stamp_ns) {
+  QueuedScan q;
+  q.scan.scan.stamp_ns = stamp_ns;
+  return q;
+}
+
+TEST(ScanQueue, ASourceWaitsWhileMappingIsBehindAndTheMapCatchesUpBeforeItIsDrained) {
+  ScanQueue q(2);
+  ASSERT_TRUE(q.push(scanAt(1)));
+  ASSERT_TRUE(q.push(scanAt(2)));
+  // Full: the third push waits until the mapping side takes one.
+  auto third = std::async(std::launch::async, [&] { return q.push(scanAt(3)); });
+  EXPECT_EQ(third.wait_for(std::chrono::milliseconds(100)), std::future_status::timeout);
+  ASSERT_EQ(q.pop(std::chrono::milliseconds(100))->scan.scan.stamp_ns, 1);
+  EXPECT_TRUE(third.get());
+  // Drained only when every pushed scan is done, not merely popped.
+  auto drained = std::async(std::launch::async, [&] { return q.waitDrained(); });
+  EXPECT_EQ(q.pop(std::chrono::milliseconds(100))->scan.scan.stamp_ns, 2);
+  EXPECT_EQ(q.pop(std::chrono::milliseconds(100))->scan.scan.stamp_ns, 3);
+  EXPECT_FALSE(q.pop(std::chrono::milliseconds(10)).has_value());  // empty: a timeout
+  q.done(true);
+  q.done(false);
+  EXPECT_EQ(drained.wait_for(std::chrono::milliseconds(100)), std::future_status::timeout);
+  q.done(true);
+  EXPECT_TRUE(drained.get());
+  q.skipped();
+  EXPECT_EQ(q.notMapped(), 2u);
+}
+
+TEST(ScanQueue, StopReleasesEveryWaiter) {
+  ScanQueue q(1);
+  ASSERT_TRUE(q.push(scanAt(1)));
+  auto pusher = std::async(std::launch::async, [&] { return q.push(scanAt(2)); });
+  auto drainer = std::async(std::launch::async, [&] { return q.waitDrained(); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  q.stop();
+  EXPECT_FALSE(pusher.get());
+  EXPECT_FALSE(drainer.get());
+  EXPECT_FALSE(q.pop(std::chrono::milliseconds(10)).has_value());
+  EXPECT_TRUE(q.stopped());
+}
+
+TEST(RawRecorder, TheMappingGateIsRecordedWhenItChangesBeforeTheInputsItGates) {
+  test::TempDir dir("raw-recorder");
+  const std::filesystem::path file = dir.path() / "raw.log";
+  {
+    RawRecorder r(mission::RawLog::open(file).value());
+    const std::uint8_t bytes[3] = {1, 2, 3};
+    for (const bool enabled : {false, false, true, true, false}) {
+      r.gate(enabled, 10);
+      r.record(7, 10, bytes);
+    }
+    ASSERT_TRUE(r.sync().ok());
+  }
+  const mission::RawLogContents contents = mission::readRawLog(file).value();
+  std::vector<int> gates;  // gate records as 0/1, and -1 for each device record
+  for (const mission::RawRecord& rec : contents.records)
+    gates.push_back(rec.device_id == kMappingGateDeviceId ? rec.bytes.at(0) : -1);
+  EXPECT_EQ(gates, (std::vector<int>{0, -1, -1, 1, -1, -1, 0, -1}));
 }
 
 }  // namespace

@@ -19,8 +19,9 @@
 // odometry base pose). After a restart SourceAlignment brings the source's new frame and clock into
 // the mission's.
 //
-// Parts with their own state: ExplorationController (the loop's policy), SourceAlignment,
-// TelemetryFiles (iterations.csv, merges.csv) and Watchdog (thread heartbeats for systemd).
+// Parts with their own state: ExplorationController (the loop's policy), ScanQueue (source ->
+// mapping), RawRecorder (the raw log and the mapping gate), SourceAlignment, TelemetryFiles
+// (iterations.csv, merges.csv) and Watchdog (thread heartbeats for systemd).
 //
 // Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
 // until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
@@ -28,6 +29,8 @@
 
 #include "vog/api/api_server.hpp"
 #include "vog/api/domain.hpp"
+#include "vog/app/raw_recorder.hpp"
+#include "vog/app/scan_queue.hpp"
 #include "vog/app/source_alignment.hpp"
 #include "vog/app/systemd_notify.hpp"
 #include "vog/app/telemetry.hpp"
@@ -37,7 +40,6 @@
 #include "vog/map/merge_worker.hpp"
 #include "vog/mission/mission_control.hpp"
 #include "vog/mission/mission_store.hpp"
-#include "vog/mission/raw_log.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
 #include "vog/slam/revisit_policy.hpp"
 
@@ -45,7 +47,6 @@
 
 #include <atomic>
 #include <condition_variable>
-#include <deque>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -88,13 +89,6 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) override;
   void onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) override;
 
-  // The raw log, written by the source thread (device bytes) or the mapping thread (simulator scans).
-  void recordRaw(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes);
-  // Whether inputs recorded now are mapped (mapping_enabled_), logged as a gate record when it
-  // changed since the last input; called by the thread that records the inputs, before recording.
-  bool mappingGate(std::int64_t stamp_ns);
-  Status syncRawLog();
-
   void mappingLoop();
   void planningLoop();
   Status persistUpdate(const slam::MappingUpdate& update);
@@ -118,13 +112,9 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   // Components.
   std::unique_ptr<mission::MissionStore> store_;
-  std::mutex raw_log_mutex_;
-  std::unique_ptr<mission::RawLog> raw_log_;          // guarded by raw_log_mutex_
-  bool raw_log_failed_ = false;                       // guarded by raw_log_mutex_
+  std::unique_ptr<RawRecorder> raw_;                  // the raw log (its own lock)
   std::atomic<bool> mapping_enabled_{false};           // the mission is exploring, returning or paused
-  std::optional<bool> logged_gate_;                   // the input-writing thread only
   bool chunk_gate_ = false;                           // source thread: the gate of the chunk being decoded
-  std::uint64_t scans_not_mapped_ = 0;                // outside a mission, guarded by queue_mutex_
   std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
   std::optional<explore::ExplorationController> controller_;  // planning thread
@@ -132,16 +122,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
 
-  // Source -> mapping queue.
-  std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  struct QueuedScan {
-    slam::ScanInput scan;
-    std::optional<geometry::Pose3> T_world_vehicle_true;  // simulator only, recorded for evaluation
-  };
-  std::deque<QueuedScan> queue_;                      // guarded by queue_mutex_
-  std::size_t scans_unmapped_ = 0;                    // queued or being mapped, guarded by queue_mutex_
-  static constexpr std::size_t kMaxQueuedScans = 256;
+  ScanQueue scans_{256};                               // source -> mapping (its own lock)
 
   // Shared state, guarded by state_mutex_.
   mutable std::mutex state_mutex_;
