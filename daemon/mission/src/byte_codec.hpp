@@ -2,7 +2,7 @@
 // Little-endian field encoding for record payloads (layouts in daemon/mission/README.md). Doubles are
 // stored as their IEEE-754 bit pattern, so every value round-trips bit for bit.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 

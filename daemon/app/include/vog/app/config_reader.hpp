@@ -9,7 +9,7 @@
 // record which keys were read; check the first error with ConfigReader::status(). Parsing stops
 // binding after the first error (later calls are no-ops), so the first problem is the one reported.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 #include <yaml-cpp/yaml.h>

@@ -13,7 +13,7 @@
 //    of the valid one after it. Nothing is misread and nothing is truncated.
 // A zero-filled tail (a file system that extended the file but lost the data) reads as torn: a length
 // of 0 is never valid.
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <cstdio>

@@ -6,7 +6,7 @@
 //
 // Lifecycle: open() creates submaps/ if needed; write() and read() may be called in any order.
 // Stateless apart from the directory path, so safe to use from one thread at a time.
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/local_grid.hpp"
 

@@ -3,7 +3,7 @@
 // the bytes go to a temporary file next to it, optionally fsync'ed, then renamed over it. Used for
 // every product written in one piece (PNG, PLY, the endpoints file).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <filesystem>
 #include <string_view>
