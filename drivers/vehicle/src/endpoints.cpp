@@ -1,6 +1,6 @@
 #include "vog/vehicle/endpoints.hpp"
 
-#include "vog/codec/atomic_file.hpp"
+#include "vog/core/atomic_file.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -50,7 +50,7 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
   text += out.c_str();
   text += "\n";
 
-  if (Status st = codec::writeFileAtomically(file, text, /*sync=*/true); !st.ok())
+  if (Status st = writeFileAtomically(file, text); !st.ok())
     return Error{"endpoints file " + file.string() + ": " + st.error().message};
   return Status::success();
 }
