@@ -1,6 +1,6 @@
 #include "vog/app/vogd_config.hpp"
 
-#include "vog/app/config_reader.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -10,6 +10,9 @@
 
 namespace vog::app {
 namespace {
+
+using yaml::ConfigMap;
+using yaml::ConfigReader;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
