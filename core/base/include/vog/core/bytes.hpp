@@ -1,5 +1,5 @@
 #pragma once
-// Little- and big-endian field access for wire formats and record files. The read/write functions take
+// Little-endian field access for wire formats and record files. The read/write functions take
 // a span and an offset that the caller has already bounds-checked; ByteReader checks bounds itself and
 // names the field that did not fit.
 
