@@ -1,6 +1,6 @@
 #include "vog/client/ply.hpp"
 
-#include "vog/codec/atomic_file.hpp"
+#include "vog/core/atomic_file.hpp"
 
 #include <bit>
 #include <cstdint>
@@ -43,7 +43,7 @@ std::string encodePly(const api::Cloud& cloud) {
 
 Status writePly(const std::filesystem::path& file, const api::Cloud& cloud) {
   const std::string bytes = encodePly(cloud);
-  return codec::writeFileAtomically(file, bytes);
+  return writeFileAtomically(file, bytes);
 }
 
 }  // namespace vog::client

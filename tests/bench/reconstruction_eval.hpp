@@ -7,7 +7,7 @@
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/local_grid.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/slam/loop_closer.hpp"

@@ -4,6 +4,7 @@
 #include "vog/app/device_source.hpp"
 #include "vog/app/sim_source.hpp"
 #include "vog/app/watchdog.hpp"
+#include "vog/core/atomic_file.hpp"
 #include "vog/map/voxel_key.hpp"
 
 #include <asio/executor_work_guard.hpp>
@@ -490,11 +491,8 @@ Status Daemon::run() {
   auto port = api_->listen(config_.api.bind_address, config_.api.port);
   if (!port) return Error{"api: " + port.error().message};
   if (options_.port_file) {
-    const std::filesystem::path tmp = options_.port_file->string() + ".tmp";
-    std::ofstream(tmp) << *port << "\n";
-    std::error_code ec;
-    std::filesystem::rename(tmp, *options_.port_file, ec);
-    if (ec) return Error{"cannot write the port file " + options_.port_file->string() + ": " + ec.message()};
+    if (Status st = writeFileAtomically(*options_.port_file, std::to_string(*port) + "\n"); !st)
+      return Error{"the port file " + options_.port_file->string() + ": " + st.error().message};
   }
 
   asio::signal_set signals(io_, SIGINT, SIGTERM);

@@ -1,6 +1,6 @@
 #include "vog/app/vogd_config.hpp"
 
-#include "vog/app/config_reader.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -10,6 +10,9 @@
 
 namespace vog::app {
 namespace {
+
+using yaml::ConfigMap;
+using yaml::ConfigReader;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -48,7 +51,8 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   g.number("prob_miss", grid.prob_miss, 0.001, 0.5);
   g.number("clamp_min", grid.clamp_min, 0.001, 0.5);
   g.number("clamp_max", grid.clamp_max, 0.5, 0.999);
-  g.number("occupancy_threshold", grid.occupancy_threshold, 0.01, 0.99);
+  // Its range depends on the clamping bounds: GridConfig::validate() is the one rule, (clamp_min, clamp_max).
+  g.number("occupancy_threshold", grid.occupancy_threshold, -kInf, kInf);
   g.number("max_range_m", grid.max_range_m, 0.5, 100.0);
   g.number("cloud_voxel_m", grid.cloud_voxel_m, 0.0, 2.0);
   g.integer("normal_neighbours", grid.normal_neighbours, 3, 100);

@@ -7,8 +7,10 @@
 namespace vog::mission {
 namespace {
 
-using detail::ByteReader;
-using detail::ByteWriter;
+using detail::readMatrix;
+using detail::readPose;
+using detail::writeMatrix;
+using detail::writePose;
 
 constexpr int kMaxPartialRank = 6;
 
@@ -19,11 +21,11 @@ void encodeBody(ByteWriter& w, const SubmapClosedRecord& r) {
   w.i64(r.last_stamp_ns);
   w.u64(r.n_scans);
   w.u8(static_cast<std::uint8_t>(r.reason));
-  w.pose(r.T_world_base_odom);
-  w.matrix(r.base_z_roll_pitch);
+  writePose(w, r.T_world_base_odom);
+  writeMatrix(w, r.base_z_roll_pitch);
   w.u8(r.has_previous ? 1 : 0);
-  w.matrix(r.odometry_from_previous);
-  w.matrix(r.odometry_covariance);
+  writeMatrix(w, r.odometry_from_previous);
+  writeMatrix(w, r.odometry_covariance);
   w.string16(r.ot_file);
   w.u64(r.ot_size_bytes);
   w.u32(r.ot_crc32c);
@@ -33,13 +35,13 @@ void encodeBody(ByteWriter& w, const LoopClosureRecord& r) {
   w.u8(static_cast<std::uint8_t>(RecordType::kLoopClosure));
   w.i64(r.from);
   w.i64(r.to);
-  w.pose(r.T_from_to);
-  w.pose(r.T_from_to_prior);
-  w.matrix(r.factor.x_icp);
+  writePose(w, r.T_from_to);
+  writePose(w, r.T_from_to_prior);
+  writeMatrix(w, r.factor.x_icp);
   w.u8(static_cast<std::uint8_t>(r.factor.rank()));
-  w.matrix(r.factor.V_u);
-  w.matrix(r.factor.measurement);
-  w.matrix(r.factor.covariance);
+  writeMatrix(w, r.factor.V_u);
+  writeMatrix(w, r.factor.measurement);
+  writeMatrix(w, r.factor.covariance);
 }
 
 void encodeBody(ByteWriter& w, const OptimizedPosesRecord& r) {
@@ -47,7 +49,7 @@ void encodeBody(ByteWriter& w, const OptimizedPosesRecord& r) {
   w.u32(static_cast<std::uint32_t>(r.estimates.size()));
   for (const auto& [id, x] : r.estimates) {
     w.i64(id);
-    w.matrix(x);
+    writeMatrix(w, x);
   }
 }
 
@@ -94,11 +96,11 @@ Result<JournalRecord> decodeSubmapClosed(ByteReader& in) {
   r.last_stamp_ns = in.i64("last_stamp_ns");
   r.n_scans = in.u64("n_scans");
   const std::uint8_t reason = in.u8("reason");
-  r.T_world_base_odom = in.pose("T_world_base_odom");
-  in.matrix(r.base_z_roll_pitch, "base_z_roll_pitch");
+  r.T_world_base_odom = readPose(in, "T_world_base_odom");
+  readMatrix(in, r.base_z_roll_pitch, "base_z_roll_pitch");
   const std::uint8_t has_previous = in.u8("has_previous");
-  in.matrix(r.odometry_from_previous, "odometry_from_previous");
-  in.matrix(r.odometry_covariance, "odometry_covariance");
+  readMatrix(in, r.odometry_from_previous, "odometry_from_previous");
+  readMatrix(in, r.odometry_covariance, "odometry_covariance");
   r.ot_file = in.string16("ot_file");
   r.ot_size_bytes = in.u64("ot_size_bytes");
   r.ot_crc32c = in.u32("ot_crc32c");
@@ -124,9 +126,9 @@ Result<JournalRecord> decodeLoopClosure(ByteReader& in) {
   LoopClosureRecord r;
   r.from = in.i64("from");
   r.to = in.i64("to");
-  r.T_from_to = in.pose("T_from_to");
-  r.T_from_to_prior = in.pose("T_from_to_prior");
-  in.matrix(r.factor.x_icp, "x_icp");
+  r.T_from_to = readPose(in, "T_from_to");
+  r.T_from_to_prior = readPose(in, "T_from_to_prior");
+  readMatrix(in, r.factor.x_icp, "x_icp");
   const int k = in.u8("rank");
   if (in.ok() && (k < 1 || k > kMaxPartialRank)) {
     return Error{std::string(kType) + " record: rank " + std::to_string(k) + " is not 1..6"};
@@ -134,9 +136,9 @@ Result<JournalRecord> decodeLoopClosure(ByteReader& in) {
   r.factor.V_u = Eigen::MatrixXd::Zero(k, 6);
   r.factor.measurement = Eigen::VectorXd::Zero(k);
   r.factor.covariance = Eigen::MatrixXd::Zero(k, k);
-  in.matrix(r.factor.V_u, "V_u");
-  in.matrix(r.factor.measurement, "measurement");
-  in.matrix(r.factor.covariance, "covariance");
+  readMatrix(in, r.factor.V_u, "V_u");
+  readMatrix(in, r.factor.measurement, "measurement");
+  readMatrix(in, r.factor.covariance, "covariance");
   if (Status s = finish(in, kType); !s.ok()) return s.error();
   if (Status s = checkPose(r.T_from_to, kType, "T_from_to"); !s.ok()) return s.error();
   if (Status s = checkPose(r.T_from_to_prior, kType, "T_from_to_prior"); !s.ok()) return s.error();
@@ -160,7 +162,7 @@ Result<JournalRecord> decodeOptimizedPoses(ByteReader& in) {
   for (std::uint32_t i = 0; i < n; ++i) {
     slam::NodeId id = in.i64("node id");
     slam::Vector6d x;
-    in.matrix(x, "estimate");
+    readMatrix(in, x, "estimate");
     r.estimates.emplace_back(id, x);
   }
   if (Status s = finish(in, kType); !s.ok()) return s.error();
@@ -213,9 +215,10 @@ const char* toString(MissionState state) {
 }
 
 std::vector<std::uint8_t> encodeRecord(const JournalRecord& record) {
-  ByteWriter w;
+  std::vector<std::uint8_t> out;
+  ByteWriter w(out);
   std::visit([&w](const auto& r) { encodeBody(w, r); }, record);
-  return std::move(w.buffer());
+  return out;
 }
 
 Result<JournalRecord> decodeRecord(std::span<const std::uint8_t> payload) {

@@ -1,6 +1,6 @@
 #include "vog/mission/raw_log.hpp"
 
-#include "byte_codec.hpp"
+#include "vog/core/bytes.hpp"
 
 namespace vog::mission {
 namespace {
@@ -12,7 +12,7 @@ Result<RawLogContents> decodeRawLog(RecordScan scan, const std::string& what) {
   out.tail = scan.tail;
   out.records.reserve(scan.records.size());
   for (const FramedRecord& f : scan.records) {
-    detail::ByteReader in(f.payload);
+    ByteReader in(f.payload);
     const std::uint8_t type = in.u8("type");
     RawRecord r;
     r.device_id = in.u16("device_id");
@@ -51,12 +51,13 @@ Status RawLog::append(std::uint16_t device_id, std::int64_t stamp_ns, std::span<
     return Error{"raw log: chunk of " + std::to_string(bytes.size()) + " bytes from device " + std::to_string(device_id) +
                  " exceeds " + std::to_string(kMaxRecordPayloadBytes - kRawHeaderBytes)};
   }
-  detail::ByteWriter w;
+  std::vector<std::uint8_t> payload;
+  ByteWriter w(payload);
   w.u8(kRawRecordType);
   w.u16(device_id);
   w.i64(stamp_ns);
   w.bytes(bytes);
-  return writer_->append(w.buffer());
+  return writer_->append(payload);
 }
 
 }  // namespace vog::mission

@@ -1,6 +1,7 @@
 #include "vog/mission/record_file.hpp"
 
-#include "vog/mission/crc32c.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -12,18 +13,13 @@
 namespace vog::mission {
 namespace {
 
-std::uint32_t readU32(std::span<const std::uint8_t> b, std::size_t at) {
-  return static_cast<std::uint32_t>(b[at]) | static_cast<std::uint32_t>(b[at + 1]) << 8 |
-         static_cast<std::uint32_t>(b[at + 2]) << 16 | static_cast<std::uint32_t>(b[at + 3]) << 24;
-}
-
 // Payload length of a valid frame at `at`, or nullopt.
 std::optional<std::uint32_t> validFrame(std::span<const std::uint8_t> b, std::size_t at) {
   if (b.size() - at < kFrameHeaderBytes) return std::nullopt;
-  const std::uint32_t len = readU32(b, at);
+  const std::uint32_t len = readU32LE(b, at);
   if (len == 0 || len > kMaxRecordPayloadBytes) return std::nullopt;
   if (b.size() - at - kFrameHeaderBytes < len) return std::nullopt;
-  if (crc32c(b.subspan(at + kFrameHeaderBytes, len)) != readU32(b, at + 4)) return std::nullopt;
+  if (crc32c(b.subspan(at + kFrameHeaderBytes, len)) != readU32LE(b, at + 4)) return std::nullopt;
   return len;
 }
 
@@ -87,20 +83,11 @@ std::vector<std::uint8_t> encodeFrame(std::span<const std::uint8_t> payload) {
   out.reserve(kFrameHeaderBytes + payload.size());
   const auto len = static_cast<std::uint32_t>(payload.size());
   const std::uint32_t crc = crc32c(payload);
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(len >> (8 * i)));
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(crc >> (8 * i)));
-  out.insert(out.end(), payload.begin(), payload.end());
+  ByteWriter w(out);
+  w.u32(len);
+  w.u32(crc);
+  w.bytes(payload);
   return out;
-}
-
-Status syncDirectory(const std::filesystem::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return Error{"cannot open directory " + dir.string() + ": " + errnoText()};
-  const int rc = ::fsync(fd);
-  const std::string err = rc != 0 ? errnoText() : std::string();
-  ::close(fd);
-  if (rc != 0) return Error{"cannot fsync directory " + dir.string() + ": " + err};
-  return Status::success();
 }
 
 Result<std::unique_ptr<RecordWriter>> RecordWriter::open(const std::filesystem::path& path, RecordScan* existing) {

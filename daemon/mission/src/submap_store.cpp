@@ -1,7 +1,7 @@
 #include "vog/mission/submap_store.hpp"
 
-#include "vog/mission/crc32c.hpp"
-#include "vog/mission/record_file.hpp"
+#include "vog/core/atomic_file.hpp"
+#include "vog/core/crc.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -55,21 +55,19 @@ Result<StoredSubmapFile> SubmapStore::write(std::int64_t index, const map::Local
   if (index < 0) return Error{"submap store: negative submap index " + std::to_string(index)};
   const std::string name = fileName(index);
   const std::filesystem::path final_path = dir_ / name;
-  const std::filesystem::path tmp_path = dir_ / (name + ".tmp");
-  if (Status s = grid.save(tmp_path); !s.ok()) return Error{"submap store: " + s.error().message};
-  const int fd = ::open(tmp_path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Error{"submap store: cannot reopen " + tmp_path.string() + ": " + errnoText()};
-  auto sum = checksum(fd, tmp_path);
-  const bool synced = ::fsync(fd) == 0;
-  const std::string sync_error = synced ? std::string() : errnoText();
-  ::close(fd);
-  if (!sum) return Error{"submap store: " + sum.error().message};
-  if (!synced) return Error{"submap store: cannot fsync " + tmp_path.string() + ": " + sync_error};
-  if (std::rename(tmp_path.c_str(), final_path.c_str()) != 0) {
-    return Error{"submap store: cannot rename " + tmp_path.string() + " to " + final_path.string() + ": " + errnoText()};
-  }
-  if (Status s = syncDirectory(dir_); !s.ok()) return Error{"submap store: " + s.error().message};
-  sum->file_name = name;
+  StoredSubmapFile sum;
+  Status written = writeFileAtomically(final_path, [&](const std::filesystem::path& tmp_path) -> Status {
+    if (Status s = grid.save(tmp_path); !s.ok()) return s;
+    const int fd = ::open(tmp_path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return Error{"cannot reopen " + tmp_path.string() + ": " + errnoText()};
+    auto checked = checksum(fd, tmp_path);
+    ::close(fd);
+    if (!checked) return checked.error();
+    sum = checked.value();
+    return Status::success();
+  });
+  if (!written.ok()) return Error{"submap store: " + written.error().message};
+  sum.file_name = name;
   return sum;
 }
 

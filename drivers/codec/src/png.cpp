@@ -3,8 +3,9 @@
 
 #include "vog/codec/png.hpp"
 
-#include "vog/codec/atomic_file.hpp"
-#include "vog/codec/bytes.hpp"
+#include "vog/core/atomic_file.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 
 #include <zlib.h>
 

@@ -1,6 +1,6 @@
 #include "vog/dvl/pd0.hpp"
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,10 +11,6 @@ namespace vog::dvl {
 namespace {
 
 using codec::BadKind;
-using codec::Bytes;
-using codec::readI16LE;
-using codec::readU16LE;
-using codec::readU32LE;
 using Result0 = codec::DecodeResult<DvlEnsemble>;
 
 constexpr std::uint8_t kSync = 0x7F;
@@ -241,7 +237,7 @@ std::vector<std::uint8_t> encodePd0(const DvlEnsemble& e) {
   const std::size_t n_types = sizes.size();
 
   std::vector<std::uint8_t> out;
-  codec::ByteWriter w(out);
+  ByteWriter w(out);
   w.u8(kSync);
   w.u8(kSync);
   w.u16(0);  // size, patched below
@@ -347,7 +343,7 @@ std::vector<std::uint8_t> encodePd0(const DvlEnsemble& e) {
     w.zeros(pd0::kBottomTrackBytes - (out.size() - bt_start));
   }
 
-  codec::writeU16LE(out, 2, static_cast<std::uint16_t>(out.size()));
+  writeU16LE(out, 2, static_cast<std::uint16_t>(out.size()));
   std::uint32_t sum = 0;
   for (const std::uint8_t byte : out) sum += byte;
   w.u16(static_cast<std::uint16_t>(sum));

@@ -1,6 +1,7 @@
 #include "vog/imu/imu_can.hpp"
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -35,7 +36,7 @@ std::uint16_t sampleCrc(const std::array<can_frame, 4>& frames) {
   std::array<std::uint8_t, kCrcCoveredBytes> covered{};
   for (std::size_t k = 0; k < 3; ++k) std::memcpy(covered.data() + 8 * k, frames[k].data, 8);
   std::memcpy(covered.data() + 24, frames[3].data, 6);
-  return codec::crc16CcittFalse(covered);
+  return crc16CcittFalse(covered);
 }
 
 std::string hexId(canid_t id) {

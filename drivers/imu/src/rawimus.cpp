@@ -1,6 +1,7 @@
 #include "vog/imu/rawimus.hpp"
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,10 +18,6 @@ namespace vog::imu {
 namespace {
 
 using codec::BadKind;
-using codec::readF64LE;
-using codec::readI32LE;
-using codec::readU16LE;
-using codec::readU32LE;
 using ResultRaw = codec::DecodeResult<ImuSample>;
 
 constexpr std::uint8_t kSync[3] = {0xAA, 0x44, 0x13};  // short binary header sync
@@ -60,7 +57,7 @@ codec::DecodeResult<ImuSample> RawImusCodec::decode(std::span<const std::uint8_t
   }
   if (b.size() < rawimus::kRecordBytes) return ResultRaw::needMore();
   const auto record = b.first(rawimus::kHeaderBytes + rawimus::kBodyBytes);
-  if (codec::crc32Novatel(record) != readU32LE(b, rawimus::kHeaderBytes + rawimus::kBodyBytes)) {
+  if (crc32Novatel(record) != readU32LE(b, rawimus::kHeaderBytes + rawimus::kBodyBytes)) {
     return ResultRaw::bad(BadKind::kChecksum, 3, "RAWIMUS: CRC mismatch");
   }
   const std::size_t body = rawimus::kHeaderBytes;
@@ -93,7 +90,7 @@ std::vector<std::uint8_t> encodeRawImus(const ImuSample& s, const RawImusConfig&
   const std::int64_t week = gps_ns >= 0 ? gps_ns / week_ns : 0;
   const std::int64_t in_week_ns = gps_ns >= 0 ? gps_ns % week_ns : 0;
   std::vector<std::uint8_t> out;
-  codec::ByteWriter w(out);
+  ByteWriter w(out);
   w.u8(kSync[0]);
   w.u8(kSync[1]);
   w.u8(kSync[2]);
@@ -114,7 +111,7 @@ std::vector<std::uint8_t> encodeRawImus(const ImuSample& s, const RawImusConfig&
   w.i32(toCount(da.z(), g));
   w.i32(toCount(-da.y(), g));
   w.i32(toCount(da.x(), g));
-  w.u32(codec::crc32Novatel(out));
+  w.u32(crc32Novatel(out));
   return out;
 }
 

@@ -16,7 +16,7 @@
 #include <memory>
 #include <string>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/io/health.hpp"
 #include "vog/io/reconnect.hpp"
 

@@ -1,6 +1,7 @@
 #include "vog/sim/paths.hpp"
 
 #include "vog/geometry/sonar.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -81,15 +82,12 @@ Result<std::vector<Waypoint>> orbitPath(const Scene& scene, const PathConfig& co
 
 Result<std::vector<Waypoint>> loadWaypointFile(const std::filesystem::path& file) {
   const std::string src = file.string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(src);
-  } catch (const YAML::BadFile&) {
-    return Error{"cannot open waypoint file " + src};
-  } catch (const YAML::ParserException& e) {
-    return Error{src + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
-  }
-  auto at = [&](const YAML::Node& n) { return src + ":" + std::to_string(n.IsDefined() ? n.Mark().line + 1 : 0) + ": "; };
+  auto text = yaml::readText(file, "waypoint file");
+  if (!text) return text.error();
+  auto document = yaml::parseDocument(text.value(), src);
+  if (!document) return document.error();
+  const YAML::Node root = document.value();
+  auto at = [&](const YAML::Node& n) { return yaml::location(src, n) + ": "; };
   if (!root.IsMap() || !root["waypoints"] || root.size() != 1)
     return Error{at(root) + "waypoints: the file must be a mapping with the single key 'waypoints'"};
   const YAML::Node list = root["waypoints"];

@@ -1,11 +1,11 @@
 #include "vog/sim/scene.hpp"
 
 #include "vog/geometry/sonar.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <fstream>
 #include <set>
 #include <sstream>
 
@@ -42,11 +42,8 @@ class Parser {
       : source_(std::move(source)), base_dir_(std::move(base_dir)) {}
 
   [[noreturn]] void fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
-    const int line = node.IsDefined() ? node.Mark().line + 1 : 0;
-    throw ParseFailure{where(line) + ": " + key + ": " + what};
+    throw ParseFailure{yaml::errorAt(source_, node, key, what).message};
   }
-
-  std::string where(int line) const { return source_ + ":" + std::to_string(line); }
 
   // Rejects keys outside `allowed`, requires those in `required`.
   void checkKeys(const YAML::Node& map, const std::string& key, const std::set<std::string>& allowed,
@@ -121,7 +118,7 @@ class Parser {
     if (!node["type"]) fail(node, key + ".type", "missing required key");
     const std::string type = string(node["type"], key + ".type");
     SceneObject o;
-    o.where = where(node.Mark().line + 1);
+    o.where = yaml::location(source_, node);
     o.name = key;
     const std::set<std::string> common = {"type", "pose", "name"};
     auto with = [&](std::set<std::string> extra) {
@@ -208,25 +205,22 @@ class Parser {
 
 Result<Scene> parseScene(const std::string& yaml_text, const std::string& source_name,
                          const std::filesystem::path& base_dir) {
+  auto root = yaml::parseDocument(yaml_text, source_name);
+  if (!root) return root.error();
   try {
-    const YAML::Node root = YAML::Load(yaml_text);
     Parser parser(source_name, base_dir);
-    return parser.scene(root);
+    return parser.scene(root.value());
   } catch (const ParseFailure& f) {
     return Error{f.message};
-  } catch (const YAML::ParserException& e) {
-    return Error{source_name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
   } catch (const YAML::Exception& e) {
     return Error{source_name + ": YAML error: " + std::string(e.what())};
   }
 }
 
 Result<Scene> loadScene(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return Error{"cannot open scene file " + file.string()};
-  std::stringstream text;
-  text << in.rdbuf();
-  auto scene = parseScene(text.str(), file.string(), file.parent_path());
+  auto text = yaml::readText(file, "scene file");
+  if (!text) return text.error();
+  auto scene = parseScene(text.value(), file.string(), file.parent_path());
   if (scene.ok()) scene->source_file = file;
   return scene;
 }

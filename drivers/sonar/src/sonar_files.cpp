@@ -1,6 +1,6 @@
 #include "vog/sonar/sonar_files.hpp"
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,9 +13,6 @@
 namespace vog::sonar {
 namespace {
 
-using codec::readF32LE;
-using codec::readU32LE;
-using codec::readU64LE;
 
 constexpr std::uint32_t kArisSignature = 0x05464444;  // "DDF" + 0x05, little-endian
 constexpr std::size_t kArisFileHeaderBytes = 1024;
@@ -142,13 +139,13 @@ Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> fra
   }
   // Fixed-size header buffers keep every write provably in bounds.
   std::array<std::uint8_t, kArisFileHeaderBytes> fh{};
-  codec::writeU32LE(fh, 0, kArisSignature);
-  codec::writeU32LE(fh, aris::kFileFrameCount, static_cast<std::uint32_t>(frames.size()));
-  codec::writeU32LE(fh, aris::kFileNumRawBeams, static_cast<std::uint32_t>(beams));
-  codec::writeU32LE(fh, aris::kFileSamplesPerChannel, static_cast<std::uint32_t>(samples));
+  writeU32LE(fh, 0, kArisSignature);
+  writeU32LE(fh, aris::kFileFrameCount, static_cast<std::uint32_t>(frames.size()));
+  writeU32LE(fh, aris::kFileNumRawBeams, static_cast<std::uint32_t>(beams));
+  writeU32LE(fh, aris::kFileSamplesPerChannel, static_cast<std::uint32_t>(samples));
   const std::size_t frame_bytes =
       kArisFrameHeaderBytes + static_cast<std::size_t>(std::max(beams, 0)) * static_cast<std::size_t>(std::max(samples, 0));
-  codec::writeU64LE(fh, aris::kFileSize, kArisFileHeaderBytes + frames.size() * frame_bytes);
+  writeU64LE(fh, aris::kFileSize, kArisFileHeaderBytes + frames.size() * frame_bytes);
   std::vector<std::uint8_t> out(fh.begin(), fh.end());
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const SonarFrame& f = frames[k];
@@ -169,17 +166,17 @@ Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> fra
                    std::to_string(f.window_length_m) + " m not representable in whole microseconds"};
     }
     std::array<std::uint8_t, kArisFrameHeaderBytes> h{};
-    codec::writeU32LE(h, aris::kFrameIndex, f.frame_index);
-    codec::writeU64LE(h, aris::kFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
-    codec::writeU32LE(h, aris::kVersion, kArisSignature);
-    codec::writeF32LE(h, aris::kWindowStart, static_cast<float>(f.window_start_m));
-    codec::writeF32LE(h, aris::kWindowLength, static_cast<float>(f.window_length_m));
-    codec::writeF32LE(h, aris::kSampleRate, static_cast<float>(1e6 / period_us));
-    codec::writeU32LE(h, aris::kPingMode, ping_mode_for_beams);
-    codec::writeU32LE(h, aris::kSamplePeriod, static_cast<std::uint32_t>(period_us));
-    codec::writeF32LE(h, aris::kSoundSpeed, static_cast<float>(f.sound_speed_mps));
-    codec::writeU32LE(h, aris::kSamplesPerBeam, static_cast<std::uint32_t>(f.n_samples));
-    codec::writeU32LE(h, aris::kSampleStartDelay, static_cast<std::uint32_t>(delay_us));
+    writeU32LE(h, aris::kFrameIndex, f.frame_index);
+    writeU64LE(h, aris::kFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
+    writeU32LE(h, aris::kVersion, kArisSignature);
+    writeF32LE(h, aris::kWindowStart, static_cast<float>(f.window_start_m));
+    writeF32LE(h, aris::kWindowLength, static_cast<float>(f.window_length_m));
+    writeF32LE(h, aris::kSampleRate, static_cast<float>(1e6 / period_us));
+    writeU32LE(h, aris::kPingMode, ping_mode_for_beams);
+    writeU32LE(h, aris::kSamplePeriod, static_cast<std::uint32_t>(period_us));
+    writeF32LE(h, aris::kSoundSpeed, static_cast<float>(f.sound_speed_mps));
+    writeU32LE(h, aris::kSamplesPerBeam, static_cast<std::uint32_t>(f.n_samples));
+    writeU32LE(h, aris::kSampleStartDelay, static_cast<std::uint32_t>(delay_us));
     out.insert(out.end(), h.begin(), h.end());
     out.insert(out.end(), f.samples.begin(), f.samples.end());
   }
@@ -276,10 +273,10 @@ Result<std::vector<std::uint8_t>> encodeDdfFile(std::span<const SonarFrame> fram
   fh[1] = 'D';
   fh[2] = 'F';
   fh[3] = static_cast<std::uint8_t>(version);
-  codec::writeU32LE(fh, 4, static_cast<std::uint32_t>(frames.size()));
-  codec::writeU32LE(fh, kDdfFileHighResolution, high_frequency ? 1U : 0U);
-  codec::writeU32LE(fh, 16, static_cast<std::uint32_t>(beams));
-  codec::writeU32LE(fh, 24, static_cast<std::uint32_t>(kDidsonSamples));
+  writeU32LE(fh, 4, static_cast<std::uint32_t>(frames.size()));
+  writeU32LE(fh, kDdfFileHighResolution, high_frequency ? 1U : 0U);
+  writeU32LE(fh, 16, static_cast<std::uint32_t>(beams));
+  writeU32LE(fh, 24, static_cast<std::uint32_t>(kDidsonSamples));
   std::vector<std::uint8_t> out(fh.begin(), fh.begin() + static_cast<std::ptrdiff_t>(sizes->file_header));
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const SonarFrame& f = frames[k];
@@ -301,11 +298,11 @@ Result<std::vector<std::uint8_t>> encodeDdfFile(std::span<const SonarFrame> fram
     }
     if (f.stamp_ns < 0) return Error{where + ": negative stamp_ns"};
     std::array<std::uint8_t, 1024> h{};  // v3 uses the first 256 bytes
-    codec::writeU32LE(h, kDdfFrameIndex, f.frame_index);
-    codec::writeU64LE(h, kDdfFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
-    codec::writeU32LE(h, kDdfWindowStartCode, static_cast<std::uint32_t>(std::lround(start_code)));
-    codec::writeU32LE(h, kDdfWindowLengthCode, static_cast<std::uint32_t>(length_code));
-    codec::writeF32LE(h, kDdfSoundSpeed, static_cast<float>(f.sound_speed_mps));
+    writeU32LE(h, kDdfFrameIndex, f.frame_index);
+    writeU64LE(h, kDdfFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
+    writeU32LE(h, kDdfWindowStartCode, static_cast<std::uint32_t>(std::lround(start_code)));
+    writeU32LE(h, kDdfWindowLengthCode, static_cast<std::uint32_t>(length_code));
+    writeF32LE(h, kDdfSoundSpeed, static_cast<float>(f.sound_speed_mps));
     out.insert(out.end(), h.begin(), h.begin() + static_cast<std::ptrdiff_t>(sizes->frame_header));
     out.insert(out.end(), f.samples.begin(), f.samples.end());
   }

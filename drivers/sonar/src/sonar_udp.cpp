@@ -1,6 +1,7 @@
 #include "vog/sonar/sonar_udp.hpp"
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -35,18 +36,18 @@ codec::DecodeResult<SonarFragment> SonarUdpCodec::decode(std::span<const std::ui
   if (b[4] != kVersion) return malformed("format version " + std::to_string(b[4]) + ", expected 1");
   if (b[5] != udp::kHeaderBytes) return malformed("header size " + std::to_string(b[5]) + ", expected 68");
   SonarFragment f;
-  f.fragment_index = codec::readU16LE(b, 6);
-  f.fragment_count = codec::readU16LE(b, 8);
-  const std::size_t payload_bytes = codec::readU16LE(b, 10);
-  f.frame_index = codec::readU32LE(b, 12);
-  f.total_bytes = codec::readU32LE(b, 16);
-  f.offset = codec::readU32LE(b, 20);
-  f.stamp_ns = codec::readI64LE(b, 24);
-  f.n_beams = codec::readU16LE(b, 32);
-  f.n_samples = codec::readU16LE(b, 34);
-  f.window_start_m = codec::readF64LE(b, 36);
-  f.window_length_m = codec::readF64LE(b, 44);
-  f.sound_speed_mps = codec::readF64LE(b, 52);
+  f.fragment_index = readU16LE(b, 6);
+  f.fragment_count = readU16LE(b, 8);
+  const std::size_t payload_bytes = readU16LE(b, 10);
+  f.frame_index = readU32LE(b, 12);
+  f.total_bytes = readU32LE(b, 16);
+  f.offset = readU32LE(b, 20);
+  f.stamp_ns = readI64LE(b, 24);
+  f.n_beams = readU16LE(b, 32);
+  f.n_samples = readU16LE(b, 34);
+  f.window_start_m = readF64LE(b, 36);
+  f.window_length_m = readF64LE(b, 44);
+  f.sound_speed_mps = readF64LE(b, 52);
   const std::size_t datagram = udp::kHeaderBytes + payload_bytes + udp::kCrcBytes;
   if (datagram > udp::kMaxDatagramBytes) return malformed("payload of " + std::to_string(payload_bytes) + " bytes too large");
   if (f.n_beams < 1 || f.n_beams > limits_.max_beams || f.n_samples < 1 || f.n_samples > limits_.max_samples) {
@@ -61,8 +62,8 @@ codec::DecodeResult<SonarFragment> SonarUdpCodec::decode(std::span<const std::ui
                      " at offset " + std::to_string(f.offset) + " outside the frame");
   }
   if (b.size() < datagram) return ResultUdp::needMore();
-  const std::uint32_t crc = codec::readU32LE(b, udp::kHeaderBytes + payload_bytes);
-  if (codec::crc32Ieee(b.first(udp::kHeaderBytes + payload_bytes)) != crc) {
+  const std::uint32_t crc = readU32LE(b, udp::kHeaderBytes + payload_bytes);
+  if (crc32Ieee(b.first(udp::kHeaderBytes + payload_bytes)) != crc) {
     return ResultUdp::bad(BadKind::kChecksum, 4, "sonar UDP: CRC mismatch in frame " + std::to_string(f.frame_index) +
                                                      " fragment " + std::to_string(f.fragment_index));
   }
@@ -97,7 +98,7 @@ Result<std::vector<std::vector<std::uint8_t>>> encodeSonarDatagrams(const SonarF
     const std::size_t n = std::min(payload_bytes, total - offset);
     std::vector<std::uint8_t> d;
     d.reserve(udp::kHeaderBytes + n + udp::kCrcBytes);
-    codec::ByteWriter w(d);
+    ByteWriter w(d);
     for (const std::uint8_t m : kMagic) w.u8(m);
     w.u8(kVersion);
     w.u8(static_cast<std::uint8_t>(udp::kHeaderBytes));
@@ -116,7 +117,7 @@ Result<std::vector<std::vector<std::uint8_t>>> encodeSonarDatagrams(const SonarF
     w.u32(0);
     w.u32(0);
     w.bytes(std::span(frame.samples).subspan(offset, n));
-    w.u32(codec::crc32Ieee(d));
+    w.u32(crc32Ieee(d));
     out.push_back(std::move(d));
   }
   return out;

@@ -1,6 +1,7 @@
 #include "vog/vehicle/endpoints.hpp"
 
-#include "vog/codec/atomic_file.hpp"
+#include "vog/core/atomic_file.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -50,18 +51,17 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
   text += out.c_str();
   text += "\n";
 
-  if (Status st = codec::writeFileAtomically(file, text, /*sync=*/true); !st.ok())
+  if (Status st = writeFileAtomically(file, text); !st.ok())
     return Error{"endpoints file " + file.string() + ": " + st.error().message};
   return Status::success();
 }
 
 Result<VehicleEndpoints> readEndpointsFile(const std::filesystem::path& file) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& ex) {
-    return Error{file.string() + ": " + ex.what()};
-  }
+  auto text = yaml::readText(file, "endpoints file");
+  if (!text) return text.error();
+  auto document = yaml::parseDocument(text.value(), file.string());
+  if (!document) return document.error();
+  const YAML::Node root = document.value();
   VehicleEndpoints e;
   std::string missing;
   auto get = [&](const char* section, const char* key) -> YAML::Node {

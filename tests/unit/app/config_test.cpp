@@ -202,6 +202,12 @@ TEST(VogdConfig, CrossFieldRulesAreChecked) {
   // A component's own rule (clamping bounds around the occupancy threshold), named by section.
   const std::string e = errorOf("source: devices\nmapping:\n  grid: {clamp_max: 0.6, occupancy_threshold: 0.7}\n");
   EXPECT_NE(e.find("mapping"), std::string::npos) << e;
+  // The occupancy threshold has that one rule only, whatever side of the clamping bounds it is on.
+  for (const char* t : {"0.05", "0.995"}) {
+    const std::string o = errorOf(std::string("source: devices\nmapping:\n  grid: {occupancy_threshold: ") + t + "}\n");
+    EXPECT_NE(o.find("occupancy_threshold"), std::string::npos) << o;
+    EXPECT_NE(o.find("(clamp_min, clamp_max)"), std::string::npos) << o;
+  }
   // The simulator needs a scene; devices need a device path.
   EXPECT_NE(errorOf("source: sim\n").find("sim.scene: missing required key"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\n").find("devices.dvl"), std::string::npos);

@@ -1,6 +1,6 @@
 #include "vog/backseat/backseat.hpp"
 #include "vog/backseat/local_tangent_plane.hpp"
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 
 #include <gtest/gtest.h>
@@ -10,8 +10,6 @@
 
 namespace vog::backseat {
 namespace {
-
-using codec::asBytes;
 
 TEST(Backseat, ChecksumIsXorBetweenDollarAndStar) {
   // NMEA-style example: XOR of "GPGLL,5300.97914,N,00259.98174,E,125926,A" is 0x28 (NMEA 0183).

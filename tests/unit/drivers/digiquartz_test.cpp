@@ -1,4 +1,4 @@
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/depth/digiquartz.hpp"
 #include "vog/depth/unesco.hpp"
@@ -7,8 +7,6 @@
 
 namespace vog::depth {
 namespace {
-
-using codec::asBytes;
 
 TEST(Unesco, CheckValueOfTheTechnicalPaper) {
   // Fofonoff & Millard (1983) p. 28: P = 10000 dbar, latitude 30 deg -> 9712.653 m.

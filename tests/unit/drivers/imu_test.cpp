@@ -1,4 +1,5 @@
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
+#include "vog/core/crc.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/imu/imu_can.hpp"
 #include "vog/imu/rawimus.hpp"
@@ -55,7 +56,7 @@ TEST(ImuCan, FramesCarryTheDocumentedIdsAndCrc) {
   // README: CRC-16/CCITT-FALSE over 8 + 8 + 8 + 6 bytes, little-endian in frame 3 bytes 6-7.
   std::array<std::uint8_t, 30> covered{};
   for (std::size_t i = 0; i < covered.size(); ++i) covered[i] = (*frames)[i / 8].data[i % 8];
-  const std::uint16_t crc = codec::crc16CcittFalse(covered);
+  const std::uint16_t crc = crc16CcittFalse(covered);
   EXPECT_EQ((*frames)[3].data[6], crc & 0xFF);
   EXPECT_EQ((*frames)[3].data[7], crc >> 8);
 }

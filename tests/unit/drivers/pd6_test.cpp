@@ -1,4 +1,4 @@
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/dvl/pd6.hpp"
 
@@ -6,8 +6,6 @@
 
 namespace vog::dvl {
 namespace {
-
-using codec::asBytes;
 
 TEST(Pd6, DecodesManualStyleLines) {
   const std::string lines =

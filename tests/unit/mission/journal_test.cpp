@@ -5,7 +5,6 @@
 // misread.
 #include "journal_fixture.hpp"
 #include "test_support.hpp"
-#include "vog/mission/crc32c.hpp"
 #include "vog/mission/journal.hpp"
 
 #include <gtest/gtest.h>
@@ -31,14 +30,6 @@ std::filesystem::path writeJournal(const std::filesystem::path& path, const std:
 void expectPrefix(const JournalContents& got, const std::vector<JournalRecord>& want, std::size_t n) {
   ASSERT_EQ(got.entries.size(), n);
   for (std::size_t i = 0; i < n; ++i) EXPECT_TRUE(same(got.entries[i].record, want[i])) << "record " << i;
-}
-
-TEST(Crc32c, MatchesTheStandardCheckValueAndExtends) {
-  const std::string s = "123456789";
-  const std::span<const std::uint8_t> b(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
-  EXPECT_EQ(crc32c(b), 0xE3069283U);  // RFC 3720 B.4 / the CRC catalogue's check value
-  EXPECT_EQ(crc32cExtend(crc32c(b.first(4)), b.subspan(4)), 0xE3069283U);
-  EXPECT_EQ(crc32c({}), 0U);
 }
 
 TEST(Journal, EveryRecordTypeRoundTripsBitForBit) {

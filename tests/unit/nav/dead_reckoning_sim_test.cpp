@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "test_support.hpp"
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/pd0.hpp"
@@ -91,7 +91,7 @@ class WireFeed {
     auto reading = mock::toDigiquartzReading(s, config_);
     ASSERT_TRUE(reading.ok()) << reading.error().message;
     const std::string line = depth::encodePressureReply(0, 1, *reading, config_.depth_decimals);
-    depth_decoder_.feed(codec::asBytes(line));
+    depth_decoder_.feed(asBytes(line));
     auto decoded = depth_decoder_.next();
     ASSERT_TRUE(decoded.has_value()) << depth_decoder_.stats().last_error;
     auto sample = depth::toDepthSample(*decoded, config_.depth, s.stamp_ns);

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "vog/codec/bytes.hpp"
+#include "vog/core/bytes.hpp"
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/depth/digiquartz.hpp"
 #include "vog/depth/unesco.hpp"
@@ -41,7 +41,7 @@ TEST(SimWireTest, DigiquartzReadingDecodesToTheSimulatedDepth) {
     ASSERT_TRUE(reading.ok()) << reading.error().message;
     const std::string line = depth::encodePressureReply(0, 1, *reading, 9);
     codec::StreamDecoder<depth::DigiquartzCodec> dec;
-    dec.feed(codec::asBytes(line));
+    dec.feed(asBytes(line));
     auto msg = dec.next();
     ASSERT_TRUE(msg.has_value());
     auto sample = depth::toDepthSample(*msg, c.depth, 5);

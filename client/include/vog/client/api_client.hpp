@@ -4,7 +4,7 @@
 
 #include "vog/api/domain.hpp"
 #include "vog/api/map_delta.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/v1/api.pb.h"
 
 #include <chrono>

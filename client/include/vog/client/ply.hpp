@@ -4,7 +4,7 @@
 // normals.
 
 #include "vog/api/domain.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <filesystem>
 #include <string>

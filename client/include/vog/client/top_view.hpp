@@ -6,7 +6,7 @@
 
 #include "vog/api/map_delta.hpp"
 #include "vog/codec/png.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 

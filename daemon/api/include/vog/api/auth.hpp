@@ -3,7 +3,7 @@
 // proto/README.md "Authentication". The shared secret never crosses the wire: the server sends a
 // fresh random nonce, the client answers HMAC(secret, server_nonce || client_nonce || "vog.v1").
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <array>
 #include <cstdint>

@@ -4,7 +4,7 @@
 // the wire form; vog/api/convert.hpp maps one to the other at the edge (STYLE 14).
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
 
 #include <Eigen/Core>

@@ -3,7 +3,7 @@
 // followed by one serialized vog.v1.Envelope. Pure and incremental (STYLE 13): the socket code only
 // moves bytes in and out.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/v1/api.pb.h"
 
 #include <cstddef>

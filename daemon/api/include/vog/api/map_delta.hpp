@@ -2,7 +2,7 @@
 // Merged map <-> vog.v1.MapDelta (proto/vog/v1/map.proto): the server side encodes the blocks changed
 // since a client's version; the client side (`MapMirror`) applies deltas to its copy.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
 
 #include <array>

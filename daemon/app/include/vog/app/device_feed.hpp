@@ -30,7 +30,7 @@
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/pd0.hpp"
 #include "vog/dvl/pd6.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/imu/imu_can.hpp"
 #include "vog/nav/dead_reckoning.hpp"
 #include "vog/slam/submap_builder.hpp"

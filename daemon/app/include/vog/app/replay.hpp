@@ -9,7 +9,7 @@
 // started afresh live where the replay's goes on.
 
 #include "vog/app/vogd_config.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <filesystem>

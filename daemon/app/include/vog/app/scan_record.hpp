@@ -5,7 +5,7 @@
 // Payload, little-endian: [i64 stamp_ns][f64 R x 9, row-major][f64 t x 3] (T_world_vehicle_odom)
 // [f64 z roll pitch][u32 n][f32 range_m x n] (+inf = no return).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/submap_builder.hpp"
 
 #include <cstdint>

@@ -6,7 +6,7 @@
 // Lifecycle: open() in the mission folder; plan() from the planning thread, merge() from the main
 // thread (each file has one writer).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merge_worker.hpp"
 #include "vog/plan/nbv_planner.hpp"
 

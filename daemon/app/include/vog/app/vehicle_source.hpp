@@ -7,7 +7,7 @@
 
 #include "vog/api/domain.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/submap_builder.hpp"
 
 #include <Eigen/Core>

@@ -5,7 +5,7 @@
 
 #include "vog/app/device_feed.hpp"
 #include "vog/app/waypoint_follower.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/io/can.hpp"
 #include "vog/io/modbus_client.hpp"
 #include "vog/io/serial.hpp"

@@ -25,7 +25,7 @@
 #include "vog/backseat/backseat.hpp"
 #include "vog/backseat/local_tangent_plane.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 
 #include <cstdint>

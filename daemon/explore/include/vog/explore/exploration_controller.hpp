@@ -29,7 +29,7 @@
 // thread-safe: one thread owns it.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/mission/mission_control.hpp"
 #include "vog/plan/nbv_planner.hpp"

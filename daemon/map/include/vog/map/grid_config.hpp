@@ -2,7 +2,7 @@
 // Occupancy parameters shared by every grid of one VOG-Map (thesis Eq. 3.2-3.5). Defaults are OctoMap's
 // (Hornung 2013) and the thesis's resolution (Table 4.2).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cmath>
 #include <cstdint>

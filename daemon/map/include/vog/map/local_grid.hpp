@@ -9,7 +9,7 @@
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/voxel_key.hpp"

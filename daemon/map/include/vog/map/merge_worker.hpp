@@ -13,7 +13,7 @@
 // that calls it at fixed points of simulated time (e.g. right before each submit) sees snapshots that
 // depend only on its inputs, while the merge still overlaps with its own work in between.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/map/vog_map.hpp"
 

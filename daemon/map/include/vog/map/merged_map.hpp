@@ -21,7 +21,7 @@
 // never change; the writer copies a block before changing one that a snapshot still holds.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/block_table.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/vog_map.hpp"

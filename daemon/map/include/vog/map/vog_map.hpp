@@ -9,7 +9,7 @@
 // the entry list (`entries()`) stays valid without the lock.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/local_grid.hpp"
 

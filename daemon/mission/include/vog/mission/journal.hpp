@@ -5,7 +5,7 @@
 // written together by MissionStore: SubmapClosed, its LoopClosure records, then OptimizedPoses, which
 // commits the group.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mission/record_file.hpp"
 #include "vog/slam/pose_graph.hpp"
 #include "vog/slam/pose_vector.hpp"

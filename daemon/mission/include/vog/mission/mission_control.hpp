@@ -13,7 +13,7 @@
 // and the state. Lifecycle: construct (optionally resumed from a journaled state: exploring and
 // returning resume as they were, paused resumes paused); no threads (the caller serialises).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mission/journal.hpp"
 
 #include <Eigen/Core>

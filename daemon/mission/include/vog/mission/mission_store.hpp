@@ -21,7 +21,7 @@
 // them). Invariants: the journal on disk always ends with a committed group or a non-group record after
 // every sync; a submap's record is never synced before its .ot file is durable; submap indices are
 // consecutive from 0. After a failed write the store refuses further writes (reopen to recover).
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/mission/journal.hpp"
 #include "vog/mission/submap_store.hpp"

@@ -3,7 +3,7 @@
 // (record_file.hpp framing, CRC-32C per record), one file per mission, so that a mission can be
 // replayed offline from exactly what the drivers saw. Payload: [u8 type = 0x80][u16 device_id]
 // [i64 stamp_ns][the device's bytes], little-endian (daemon/mission/README.md).
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mission/record_file.hpp"
 
 #include <cstdint>

@@ -13,7 +13,8 @@
 //    of the valid one after it. Nothing is misread and nothing is truncated.
 // A zero-filled tail (a file system that extended the file but lost the data) reads as torn: a length
 // of 0 is never valid.
-#include "vog/geometry/result.hpp"
+#include "vog/core/atomic_file.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <cstdio>
@@ -86,8 +87,5 @@ class RecordWriter {
   std::optional<Error> failed_;
   std::vector<char> stdio_buffer_ = std::vector<char>(64 * 1024);
 };
-
-// fsync of a directory, so that a created or renamed entry in it is durable.
-Status syncDirectory(const std::filesystem::path& dir);
 
 }  // namespace vog::mission

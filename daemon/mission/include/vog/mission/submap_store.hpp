@@ -1,12 +1,13 @@
 #pragma once
 // SubmapStore: the closed submaps of a mission as OctoMap files, `submaps/NNNNNN.ot` (index, six
-// digits, zero-padded) under the mission directory. A file is written as `NNNNNN.ot.tmp`, fsync'ed,
-// renamed and the directory fsync'ed, so that a file under its final name is always complete; the
-// journal record naming it (with its size and CRC-32C) is synced only after that.
+// digits, zero-padded) under the mission directory. A file is written atomically (writeFileAtomically:
+// a temporary file next to it, fsync'ed, renamed and the directory fsync'ed), so that a file under its
+// final name is always complete; the journal record naming it (with its size and CRC-32C) is synced
+// only after that.
 //
 // Lifecycle: open() creates submaps/ if needed; write() and read() may be called in any order.
 // Stateless apart from the directory path, so safe to use from one thread at a time.
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/local_grid.hpp"
 

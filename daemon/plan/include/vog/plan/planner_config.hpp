@@ -2,7 +2,7 @@
 // Parameters of the next-best-view planner (thesis 4.3, 4.5.3-4.5.4 after Bircher et al. 2016).
 // Defaults are the propeller simulation's (thesis Table 4.2) unless marked as our choice.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 
 #include <Eigen/Core>

@@ -24,7 +24,7 @@
 // rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe:
 // one planner owns one grid.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
 
 #include <Eigen/Geometry>

@@ -9,7 +9,7 @@
 // vertices given by FIX lines held constant, or the lowest-id vertex when there is no FIX line.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/pose_vector.hpp"
 
 #include <Eigen/Core>

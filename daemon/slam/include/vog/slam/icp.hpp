@@ -23,7 +23,7 @@
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/pose_vector.hpp"
 
 #include <Eigen/Core>

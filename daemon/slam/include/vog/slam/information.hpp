@@ -7,7 +7,7 @@
 // Using L itself (as the Ceres pose-graph example does with matrixL()) gives e^T L^T L e, which equals
 // e^T Omega e only for diagonal Omega.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 

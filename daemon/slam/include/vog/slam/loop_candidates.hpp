@@ -6,7 +6,7 @@
 // An optional Mahalanobis gate compares a registration with the odometry prediction.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 

@@ -12,7 +12,7 @@
 //
 // Stateless apart from its configuration: each call is a pure function of its inputs.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/local_grid.hpp"
 #include "vog/slam/icp.hpp"
 #include "vog/slam/loop_candidates.hpp"

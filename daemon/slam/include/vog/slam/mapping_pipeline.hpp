@@ -20,7 +20,7 @@
 // pipeline then refuses further input with the original error (the odometry chain would have a gap).
 // Deterministic: no clocks, no randomness.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/map/vog_map.hpp"
 #include "vog/slam/loop_closer.hpp"
 #include "vog/slam/pose_graph.hpp"

@@ -11,7 +11,7 @@
 // is compiled in, else Eigen's sparse Cholesky; OptimizeResult::linear_solver says which).
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/pose_vector.hpp"
 
 #include <Eigen/Core>

@@ -16,7 +16,7 @@
 // iteration with the mapping pipeline's current submaps and closures (append-only lists).
 // Deterministic: a pure function of its inputs and the calls made before.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/slam/loop_closer.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
 

@@ -16,7 +16,7 @@
 // scan in the active grid was inserted relative to the active base pose; a rejected scan (bad pose,
 // non-increasing stamp, wrong beam count, NaN range) changes nothing.
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/map/grid_config.hpp"
 #include "vog/map/local_grid.hpp"

@@ -17,7 +17,7 @@
 // Other $BF sentences are kept as raw fields (BackseatOther) so nothing is lost.
 
 #include "vog/codec/decode_result.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <optional>

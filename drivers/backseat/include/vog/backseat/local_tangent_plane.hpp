@@ -7,7 +7,7 @@
 // (the flat-earth approximation; over the few hundred metres of a harbour survey its error is far
 // below the 1e-6' = 2 mm resolution of the sentences). The two directions are exact inverses.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 

@@ -3,7 +3,7 @@
 // colour type 2, no interlace), one IDAT holding a zlib stream (RFC 1950) of the scanlines, each
 // led by filter type 0 (None), and IEND. Used for top views (vogsim's scene preview, vogctl's map).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <array>
 #include <cstdint>

@@ -1,7 +1,7 @@
 #pragma once
 // Depth sensor domain types and the pressure -> depth conversion settings.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 

@@ -7,7 +7,7 @@
 
 #include "vog/codec/decode_result.hpp"
 #include "vog/depth/depth_types.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <span>

@@ -3,7 +3,7 @@
 // wire format (PD0 binary or PD6 ASCII). Field meanings: RDI "WorkHorse Commands and Output Data
 // Format" manual, PD0 and PD6 chapters.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <array>
 #include <cstdint>

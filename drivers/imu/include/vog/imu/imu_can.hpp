@@ -4,7 +4,7 @@
 // read() returns them from a CAN_RAW socket or the SOCK_SEQPACKET stand-in).
 
 #include "vog/codec/decode_result.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/imu/imu_types.hpp"
 
 #include <linux/can.h>

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/io/byte_stream.hpp"
 #include "vog/io/health.hpp"
 #include "vog/io/reconnect.hpp"

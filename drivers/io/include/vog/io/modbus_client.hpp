@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/io/health.hpp"
 #include "vog/io/serial.hpp"
 

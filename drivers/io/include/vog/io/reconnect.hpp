@@ -4,7 +4,7 @@
 #include <chrono>
 #include <string>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 namespace vog::io {
 

@@ -7,7 +7,7 @@
 #include <span>
 #include <string>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/io/byte_stream.hpp"
 #include "vog/io/health.hpp"
 #include "vog/io/reconnect.hpp"

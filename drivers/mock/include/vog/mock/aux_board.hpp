@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mock/device_thread.hpp"
 #include "vog/mock/faults.hpp"
 

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mock/device_thread.hpp"
 
 namespace vog::mock {

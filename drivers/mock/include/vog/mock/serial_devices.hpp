@@ -10,7 +10,7 @@
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/dvl_types.hpp"
 #include "vog/dvl/pd6.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mock/faults.hpp"
 #include "vog/mock/pty_device.hpp"
 

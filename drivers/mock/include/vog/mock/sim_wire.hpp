@@ -16,7 +16,7 @@
 
 #include "vog/depth/depth_types.hpp"
 #include "vog/dvl/dvl_types.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/imu/imu_types.hpp"
 #include "vog/sim/nav_model.hpp"
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "vog/backseat/backseat.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/imu/imu_can.hpp"
 #include "vog/mock/faults.hpp"
 #include "vog/mock/stream_server.hpp"

@@ -10,7 +10,7 @@
 // of times, changing the vehicle's waypoints in between as the caller wishes. Invariants: the
 // odometry estimate was advanced exactly once per step; sample stamps never decrease.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sim/nav_model.hpp"
 #include "vog/sim/sonar_model.hpp"
 #include "vog/sim/vehicle.hpp"

@@ -3,7 +3,7 @@
 // All noise comes from the model's own seeded streams; time comes from the caller's stamps.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/sim/vehicle.hpp"
 #include "vog/sim/world.hpp"

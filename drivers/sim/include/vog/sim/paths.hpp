@@ -1,7 +1,7 @@
 #pragma once
 // Scripted survey trajectories for `vogsim survey`: waypoint lists in the world frame.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sim/scene.hpp"
 #include "vog/sim/vehicle.hpp"
 

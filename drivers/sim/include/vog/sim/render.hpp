@@ -3,7 +3,7 @@
 
 #include "vog/codec/png.hpp"
 #include "vog/geometry/point_cloud.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sim/world.hpp"
 
 #include <cstdint>

@@ -4,7 +4,7 @@
 // A Scene is plain data: parsing validates every key and value, so a Scene that exists is usable.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Geometry>
 

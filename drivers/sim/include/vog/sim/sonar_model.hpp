@@ -25,7 +25,7 @@
 // deterministic per seed.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/sim/world.hpp"
 #include "vog/sonar/sonar_frame.hpp"

@@ -3,7 +3,7 @@
 // stream (sonar ranges, intensity frames, DVL, IMU, depth, corrupted odometry) plus ground truth
 // (trajectory, true pose of each scan) to a directory. Format: drivers/sim/README.md.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/sim/lockstep.hpp"
 #include "vog/sim/nav_model.hpp"

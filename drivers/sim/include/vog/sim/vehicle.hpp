@@ -4,7 +4,7 @@
 // collision box touch the scene is refused and reported, so the vehicle never passes through.
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sim/world.hpp"
 
 #include <Eigen/Core>

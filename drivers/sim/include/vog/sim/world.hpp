@@ -9,7 +9,7 @@
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sim/scene.hpp"
 
 #include <Eigen/Core>

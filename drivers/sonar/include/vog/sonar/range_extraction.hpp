@@ -4,7 +4,7 @@
 // threshold above the frame's noise floor, take the first strong return per beam (a run of
 // `min_run_samples` samples above threshold) beyond a minimum range.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/sonar/sonar_frame.hpp"
 

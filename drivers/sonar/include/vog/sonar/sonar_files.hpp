@@ -21,7 +21,7 @@
 // (u32, index into {1.125, 2.25, 4.5, 9} m), 60 sound speed (f32 m/s, 0 = unknown). Window start =
 // code * 0.375 m for high frequency; low frequency doubles start and length (PROTOCOLS.md).
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sonar/sonar_frame.hpp"
 
 #include <cstdint>

@@ -20,7 +20,7 @@
 // The default payload of 1400 bytes keeps a datagram under a 1500-byte Ethernet MTU.
 
 #include "vog/codec/decode_result.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/sonar/sonar_frame.hpp"
 
 #include <cstddef>

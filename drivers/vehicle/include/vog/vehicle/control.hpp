@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/mock/device_thread.hpp"
 #include "vog/mock/faults.hpp"
 

@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 namespace vog::vehicle {
 

@@ -46,7 +46,7 @@
 #include <optional>
 #include <string>
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/mock/sim_wire.hpp"
 #include "vog/sim/lockstep.hpp"

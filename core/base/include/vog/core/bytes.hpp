@@ -1,16 +1,18 @@
 #pragma once
-// Little- and big-endian field access for wire formats, and the checksums the codecs share.
-// Readers take a span and an offset that the caller has already bounds-checked.
+// Little-endian field access for wire formats and record files. The read/write functions take
+// a span and an offset that the caller has already bounds-checked; ByteReader checks bounds itself and
+// names the field that did not fit.
 
 #include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
-namespace vog::codec {
+namespace vog {
 
 using Bytes = std::span<const std::uint8_t>;
 
@@ -30,7 +32,7 @@ inline std::int64_t readI64LE(Bytes b, std::size_t at) { return static_cast<std:
 inline float readF32LE(Bytes b, std::size_t at) { return std::bit_cast<float>(readU32LE(b, at)); }
 inline double readF64LE(Bytes b, std::size_t at) { return std::bit_cast<double>(readU64LE(b, at)); }
 
-// Appends little-endian fields to a byte vector.
+// Appends little-endian fields to a byte vector it borrows (the caller owns the vector).
 class ByteWriter {
  public:
   explicit ByteWriter(std::vector<std::uint8_t>& out) : out_(out) {}
@@ -54,6 +56,11 @@ class ByteWriter {
   void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
   void zeros(std::size_t n) { out_.insert(out_.end(), n, 0); }
   void bytes(Bytes b) { out_.insert(out_.end(), b.begin(), b.end()); }
+  // A string of at most 65535 bytes, after its u16 length.
+  void string16(const std::string& s) {
+    u16(static_cast<std::uint16_t>(s.size()));
+    out_.insert(out_.end(), s.begin(), s.end());
+  }
   std::size_t size() const { return out_.size(); }
 
  private:
@@ -81,13 +88,55 @@ inline Bytes asBytes(std::string_view s) {
   return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
 }
 
-// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final xor); check("123456789") = 0x29B1.
-std::uint16_t crc16CcittFalse(Bytes data, std::uint16_t crc = 0xFFFF);
-// CRC-32 as in zlib / Ethernet (reflected poly 0xEDB88320, init and final xor 0xFFFFFFFF);
-// check("123456789") = 0xCBF43926.
-std::uint32_t crc32Ieee(Bytes data);
-// NovAtel's 32-bit block CRC (same reflected polynomial, init 0, no final xor), OEM7 manual
-// "32-Bit CRC".
-std::uint32_t crc32Novatel(Bytes data);
+// Reads fields in order; the first read past the end sets an error naming the field and every later
+// read returns zero, so a decoder checks `ok()` once at the end.
+class ByteReader {
+ public:
+  explicit ByteReader(Bytes in) : in_(in) {}
 
-}  // namespace vog::codec
+  std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(get(1, field)); }
+  std::uint16_t u16(const char* field) { return static_cast<std::uint16_t>(get(2, field)); }
+  std::uint32_t u32(const char* field) { return static_cast<std::uint32_t>(get(4, field)); }
+  std::uint64_t u64(const char* field) { return get(8, field); }
+  std::int64_t i64(const char* field) { return static_cast<std::int64_t>(get(8, field)); }
+  double f64(const char* field) { return std::bit_cast<double>(get(8, field)); }
+  Bytes bytes(std::size_t n, const char* field) {
+    if (!need(n, field)) return {};
+    auto s = in_.subspan(pos_, n);
+    pos_ += n;
+    return s;
+  }
+  std::string string16(const char* field) {
+    const std::size_t n = u16(field);
+    auto s = bytes(n, field);
+    return std::string(s.begin(), s.end());
+  }
+
+  std::size_t remaining() const { return in_.size() - pos_; }
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+
+ private:
+  bool need(std::size_t n, const char* field) {
+    if (!error_.empty()) return false;
+    if (in_.size() - pos_ < n) {
+      error_ = std::string("payload ends inside field '") + field + "' (" + std::to_string(n) + " bytes needed, " +
+               std::to_string(in_.size() - pos_) + " left)";
+      return false;
+    }
+    return true;
+  }
+  std::uint64_t get(int n, const char* field) {
+    if (!need(static_cast<std::size_t>(n), field)) return 0;
+    std::uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v |= static_cast<std::uint64_t>(in_[pos_ + static_cast<std::size_t>(i)]) << (8 * i);
+    pos_ += static_cast<std::size_t>(n);
+    return v;
+  }
+
+  Bytes in_;
+  std::size_t pos_ = 0;
+  std::string error_;
+};
+
+}  // namespace vog

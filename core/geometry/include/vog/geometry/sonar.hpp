@@ -5,7 +5,7 @@
 // (thesis 4.1: DIDSON with a concentrator lens, 96 beams over 29 deg, 1 deg vertical).
 
 #include "vog/geometry/pose.hpp"
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <cstdint>
 #include <limits>

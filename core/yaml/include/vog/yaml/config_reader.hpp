@@ -9,10 +9,12 @@
 // record which keys were read; check the first error with ConfigReader::status(). Parsing stops
 // binding after the first error (later calls are no-ops), so the first problem is the one reported.
 
-#include "vog/geometry/result.hpp"
+#include "vog/core/result.hpp"
 
 #include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
+
+#include <filesystem>
 
 #include <cstdint>
 #include <initializer_list>
@@ -22,7 +24,17 @@
 #include <string>
 #include <vector>
 
-namespace vog::app {
+namespace vog::yaml {
+
+// The YAML document of `text`; a syntax error is "source:line: YAML syntax error: ...". An empty
+// document is a null node.
+Result<YAML::Node> parseDocument(const std::string& text, const std::string& source_name);
+// The whole of `file` as text; the error names the file and `what` it was meant to be.
+Result<std::string> readText(const std::filesystem::path& file, const std::string& what);
+// "source:line" of a node of the document (line 0 for a node that is not in the file).
+std::string location(const std::string& source_name, const YAML::Node& node);
+// "source:line: key: what", the form of every error about a value of the document.
+Error errorAt(const std::string& source_name, const YAML::Node& node, const std::string& key, const std::string& what);
 
 class ConfigReader;
 
@@ -78,4 +90,4 @@ class ConfigReader {
   std::optional<Error> error_;
 };
 
-}  // namespace vog::app
+}  // namespace vog::yaml

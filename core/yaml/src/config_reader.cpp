@@ -1,12 +1,13 @@
-#include "vog/app/config_reader.hpp"
+#include "vog/yaml/config_reader.hpp"
 
 #include "vog/geometry/sonar.hpp"
 
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <sstream>
 
-namespace vog::app {
+namespace vog::yaml {
 namespace {
 
 std::string formatNumber(double v) {
@@ -29,13 +30,35 @@ std::optional<double> asNumber(const YAML::Node& node) {
 
 }  // namespace
 
-Result<std::unique_ptr<ConfigReader>> ConfigReader::parse(const std::string& text, const std::string& source_name) {
-  YAML::Node root;
+Result<YAML::Node> parseDocument(const std::string& text, const std::string& source_name) {
   try {
-    root = YAML::Load(text);
+    return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     return Error{source_name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg};
   }
+}
+
+Result<std::string> readText(const std::filesystem::path& file, const std::string& what) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return Error{"cannot open " + what + " " + file.string()};
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string location(const std::string& source_name, const YAML::Node& node) {
+  const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
+  return source_name + ":" + std::to_string(line);
+}
+
+Error errorAt(const std::string& source_name, const YAML::Node& node, const std::string& key, const std::string& what) {
+  return Error{location(source_name, node) + ": " + key + ": " + what};
+}
+
+Result<std::unique_ptr<ConfigReader>> ConfigReader::parse(const std::string& text, const std::string& source_name) {
+  auto document = parseDocument(text, source_name);
+  if (!document) return document.error();
+  YAML::Node root = document.value();
   if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   if (!root.IsMap()) return Error{source_name + ":1: the configuration must be a mapping of sections"};
   return std::unique_ptr<ConfigReader>(new ConfigReader(source_name, root));
@@ -48,8 +71,7 @@ Status ConfigReader::status() const {
 
 void ConfigReader::fail(const YAML::Node& node, const std::string& key, const std::string& what) {
   if (error_) return;
-  const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
-  error_ = Error{source_ + ":" + std::to_string(line) + ": " + key + ": " + what};
+  error_ = errorAt(source_, node, key, what);
 }
 
 std::string ConfigMap::path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
@@ -184,4 +206,4 @@ void ConfigMap::finish() {
   }
 }
 
-}  // namespace vog::app
+}  // namespace vog::yaml
