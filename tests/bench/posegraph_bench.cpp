@@ -1,5 +1,6 @@
 // vog-bench posegraph: optimise a public g2o pose graph and report g2o's chi2 before and after
-// (targets: M3500 chi2 137.9129509, intel chi2 45.00469581 within 0.01%, M3500 solve <= 300 ms).
+// through vogd's PoseGraph (targets: M3500 chi2 137.9129509, intel chi2 45.00469581 within 0.01%,
+// M3500 solve <= 300 ms).
 #include "bench_registry.hpp"
 
 #include "vog/slam/g2o.hpp"
