@@ -1,15 +1,11 @@
 #include "vog/slam/g2o.hpp"
 
-#include "solver_backend.hpp"
 #include "vog/slam/information.hpp"
-
-#include <ceres/ceres.h>
-#include <ceres/manifold.h>
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <charconv>
-#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
@@ -105,80 +101,21 @@ double edgeChi2(const G2oGraph& g, const G2oEdgeSE3& e) {
   return err.dot(e.information * err);
 }
 
-// SE2 edge residual with analytic Jacobians: e_xy = R(th_i + z_th)^T (p_j - p_i) - R(z_th)^T z_xy,
-// e_th = wrap(th_j - th_i - z_th); r = U e with U^T U = Omega.
-class Se2EdgeCost final : public ceres::SizedCostFunction<3, 3, 3> {
- public:
-  Se2EdgeCost(const Eigen::Vector3d& z, const Eigen::Matrix3d& sqrt_information) : U_(sqrt_information) {
-    z_th_ = z(2);
-    z_xy_local_ = Eigen::Rotation2Dd(z(2)).toRotationMatrix().transpose() * z.head<2>();
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const double* a = parameters[0];
-    const double* b = parameters[1];
-    const double phi = a[2] + z_th_;
-    const double c = std::cos(phi), s = std::sin(phi);
-    const double dx = b[0] - a[0], dy = b[1] - a[1];
-    Eigen::Vector3d e;
-    e << c * dx + s * dy - z_xy_local_(0), -s * dx + c * dy - z_xy_local_(1), geometry::wrapAngle(b[2] - phi);
-    Eigen::Map<Eigen::Vector3d> r(residuals);
-    r = U_ * e;
-    if (jacobians != nullptr) {
-      Eigen::Matrix3d Jb;
-      Jb << c, s, 0, -s, c, 0, 0, 0, 1;
-      if (jacobians[0] != nullptr) {
-        Eigen::Matrix3d Ja;
-        Ja << -c, -s, -s * dx + c * dy, s, -c, -c * dx - s * dy, 0, 0, -1;
-        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J0(jacobians[0]);
-        J0 = U_ * Ja;
-      }
-      if (jacobians[1] != nullptr) {
-        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J1(jacobians[1]);
-        J1 = U_ * Jb;
-      }
+// Writes the PoseGraph's estimates back into the graph's vertices; fixed vertices are left as they
+// were (bit-exact, no round trip through the 6-vector).
+void copyEstimates(const PoseGraph& pose_graph, G2oGraph& g) {
+  if (g.is_3d) {
+    for (auto& [id, T] : g.vertices_se3) {
+      if (!pose_graph.isFixed(id)) T = fromXyzRpy(*pose_graph.estimate(id));
     }
-    return true;
+  } else {
+    for (auto& [id, v] : g.vertices_se2) {
+      if (pose_graph.isFixed(id)) continue;
+      const Vector6d x = *pose_graph.estimate(id);
+      v = Eigen::Vector3d(x(kX), x(kY), x(kYaw));
+    }
   }
-
- private:
-  Eigen::Matrix3d U_;
-  double z_th_ = 0.0;
-  Eigen::Vector2d z_xy_local_;
-};
-
-// SE3 edge residual (autodiff): delta = Z^-1 X_i^-1 X_j, e = (t_delta, vec(q_delta) with qw >= 0).
-class Se3EdgeCost {
- public:
-  Se3EdgeCost(const geometry::Pose3& Z, const Matrix6d& sqrt_information) : U_(sqrt_information) {
-    const geometry::Pose3 Zinv = Z.inverse();
-    zq_inv_ = Eigen::Quaterniond(Zinv.linear()).normalized();
-    zt_inv_ = Zinv.translation();
-  }
-
-  template <typename T>
-  bool operator()(const T* ti, const T* qi, const T* tj, const T* qj, T* residuals) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> Qi(qi), Qj(qj);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ti(ti), Tj(tj);
-    const Eigen::Quaternion<T> Qi_inv = Qi.conjugate();
-    const Eigen::Quaternion<T> q_ij = Qi_inv * Qj;
-    const Eigen::Matrix<T, 3, 1> t_ij = Qi_inv * (Tj - Ti);
-    const Eigen::Quaternion<T> zq = zq_inv_.cast<T>();
-    Eigen::Quaternion<T> q_d = zq * q_ij;
-    const Eigen::Matrix<T, 3, 1> t_d = zq * t_ij + zt_inv_.cast<T>();
-    Eigen::Matrix<T, 6, 1> e;
-    const T sign = q_d.w() < T(0) ? T(-1) : T(1);
-    e << t_d, sign * q_d.vec();
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residuals);
-    r = U_.cast<T>() * e;
-    return true;
-  }
-
- private:
-  Matrix6d U_;
-  Eigen::Quaterniond zq_inv_;
-  Eigen::Vector3d zt_inv_;
-};
+}
 
 }  // namespace
 
@@ -291,7 +228,21 @@ Result<G2oGraph> parseG2o(std::string_view text) {
   }
 
   g.is_3d = seen_3d;
-  if (g.numVertices() == 0) return Error{"g2o: graph has no vertices"};
+  if (g.numVertices() == 0 && g.numEdges() == 0) return Error{"g2o: graph has no vertices and no edges"};
+  if (g.numVertices() == 0) {
+    // Edge-only file: the vertices are the edges' ids, initialised below.
+    g.vertices_from_edges = true;
+    for (std::size_t k = 0; k < g.numEdges(); ++k) {
+      for (const std::int64_t id : g.is_3d ? std::array{g.edges_se3[k].from, g.edges_se3[k].to}
+                                            : std::array{g.edges_se2[k].from, g.edges_se2[k].to}) {
+        if (g.is_3d) {
+          g.vertices_se3.emplace(id, geometry::Pose3::Identity());
+        } else {
+          g.vertices_se2.emplace(id, Eigen::Vector3d::Zero());
+        }
+      }
+    }
+  }
   for (std::size_t k = 0; k < g.numEdges(); ++k) {
     const std::int64_t from = g.is_3d ? g.edges_se3[k].from : g.edges_se2[k].from;
     const std::int64_t to = g.is_3d ? g.edges_se3[k].to : g.edges_se2[k].to;
@@ -305,6 +256,14 @@ Result<G2oGraph> parseG2o(std::string_view text) {
     const bool exists = g.is_3d ? g.vertices_se3.count(id) != 0 : g.vertices_se2.count(id) != 0;
     if (!exists) return Error{lineError(line, "FIX references missing vertex " + std::to_string(id))};
     g.fixed.insert(id);
+  }
+  if (g.vertices_from_edges) {
+    auto init = initializeFromSpanningTree(g);
+    if (!init) {
+      return Error{"g2o: the file has no VERTEX lines; initialising the vertices from the edges: " +
+                   init.error().message};
+    }
+    return init;
   }
   return g;
 }
@@ -358,115 +317,76 @@ Result<G2oGraph> initializeFromOdometry(const G2oGraph& graph) {
   return out;
 }
 
-Status G2oSolveOptions::validate() const {
-  std::ostringstream os;
-  if (max_iterations < 1) {
-    os << "max_iterations must be >= 1, got " << max_iterations;
-  } else if (!(function_tolerance > 0.0)) {
-    os << "function_tolerance must be > 0, got " << function_tolerance;
-  } else if (!(gradient_tolerance > 0.0)) {
-    os << "gradient_tolerance must be > 0, got " << gradient_tolerance;
-  } else if (!(parameter_tolerance > 0.0)) {
-    os << "parameter_tolerance must be > 0, got " << parameter_tolerance;
-  } else if (!(initial_trust_region_radius > 0.0) || !std::isfinite(initial_trust_region_radius)) {
-    os << "initial_trust_region_radius must be finite and > 0, got " << initial_trust_region_radius;
-  } else {
-    return Status::success();
-  }
-  return Error{"g2o solve options: " + os.str()};
-}
-
-Result<G2oSolveResult> optimizeG2o(G2oGraph& graph, const G2oSolveOptions& opts) {
-  if (Status s = opts.validate(); !s) return s.error();
-  if (graph.numVertices() == 0) return Error{"g2o: graph has no vertices"};
-  if (graph.numEdges() == 0) return Error{"g2o: graph has no edges"};
-  G2oSolveResult result;
-  result.chi2_initial = g2oChi2(graph);
-
-  ceres::Problem::Options problem_options;
-  ceres::Problem problem(problem_options);
-  std::set<std::int64_t> fixed = graph.fixed;
-  if (fixed.empty()) fixed.insert(graph.is_3d ? graph.vertices_se3.begin()->first : graph.vertices_se2.begin()->first);
-
-  // Working copies; written back only after a successful solve.
-  std::map<std::int64_t, Eigen::Vector3d> se2 = graph.vertices_se2;
-  std::map<std::int64_t, Eigen::Vector3d> t3;
-  std::map<std::int64_t, Eigen::Quaterniond> q3;
+Result<PoseGraph> toPoseGraph(const G2oGraph& graph, const PoseGraphConfig& config) {
+  auto created = PoseGraph::create(config);
+  if (!created) return created.error();
+  PoseGraph pose_graph = std::move(*created);
   if (graph.is_3d) {
     for (const auto& [id, T] : graph.vertices_se3) {
-      t3[id] = T.translation();
-      q3[id] = Eigen::Quaterniond(T.linear()).normalized();
+      if (Status s = pose_graph.addNode(id, T); !s) return Error{"g2o: " + s.error().message};
     }
-    for (const auto& e : graph.edges_se3) {
-      const auto U = sqrtInformation(e.information, "g2o edge information");
-      if (!U) return U.error();
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Se3EdgeCost, 6, 3, 4, 3, 4>(
-                                   new Se3EdgeCost(e.T_from_to, Matrix6d(*U))),
-                               nullptr, t3[e.from].data(), q3[e.from].coeffs().data(), t3[e.to].data(),
-                               q3[e.to].coeffs().data());
-    }
-    for (auto& [id, q] : q3) {
-      if (problem.HasParameterBlock(q.coeffs().data())) {
-        problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
-      }
-    }
-    for (const std::int64_t id : fixed) {
-      if (problem.HasParameterBlock(t3[id].data())) {
-        problem.SetParameterBlockConstant(t3[id].data());
-        problem.SetParameterBlockConstant(q3[id].coeffs().data());
+    for (const G2oEdgeSE3& e : graph.edges_se3) {
+      if (Status s = pose_graph.addSe3Factor(e.from, e.to, e.T_from_to, e.information); !s) {
+        return Error{"g2o: " + s.error().message};
       }
     }
   } else {
-    for (const auto& e : graph.edges_se2) {
-      const auto U = sqrtInformation(e.information, "g2o edge information");
-      if (!U) return U.error();
-      problem.AddResidualBlock(new Se2EdgeCost(e.measurement, Eigen::Matrix3d(*U)), nullptr, se2[e.from].data(),
-                               se2[e.to].data());
+    for (const auto& [id, v] : graph.vertices_se2) {
+      Vector6d x;
+      x << v(0), v(1), 0.0, 0.0, 0.0, v(2);
+      if (Status s = pose_graph.addNode(id, fromXyzRpy(x)); !s) return Error{"g2o: " + s.error().message};
+      // Exactly the file's values (the Pose3 round trip is not bit-exact).
+      if (Status s = pose_graph.setEstimate(id, x); !s) return Error{"g2o: " + s.error().message};
     }
-    for (const std::int64_t id : fixed) {
-      if (problem.HasParameterBlock(se2[id].data())) problem.SetParameterBlockConstant(se2[id].data());
-    }
-  }
-
-  ceres::Solver::Options options;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.max_num_iterations = opts.max_iterations;
-  options.initial_trust_region_radius = opts.initial_trust_region_radius;
-  options.function_tolerance = opts.function_tolerance;
-  options.gradient_tolerance = opts.gradient_tolerance;
-  options.parameter_tolerance = opts.parameter_tolerance;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  options.minimizer_progress_to_stdout = false;
-  std::string note;
-  detail::selectLinearSolver(options, result.linear_solver, note);
-
-  ceres::Solver::Summary summary;
-  const auto t0 = std::chrono::steady_clock::now();
-  ceres::Solve(options, &problem, &summary);
-  result.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  result.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result.converged = summary.termination_type == ceres::CONVERGENCE;
-  result.message = note + summary.message;
-  if (summary.termination_type == ceres::FAILURE) return Error{"g2o: solver failed: " + summary.message};
-
-  if (graph.is_3d) {
-    for (const auto& [id, t] : t3) {
-      if (!t.allFinite() || !q3[id].coeffs().allFinite()) {
-        return Error{"g2o: solver produced a non-finite estimate for vertex " + std::to_string(id)};
+    for (const G2oEdgeSE2& e : graph.edges_se2) {
+      if (Status s = pose_graph.addSe2Factor(e.from, e.to, e.measurement, e.information); !s) {
+        return Error{"g2o: " + s.error().message};
       }
     }
-    for (auto& [id, T] : graph.vertices_se3) {
-      T.linear() = q3[id].normalized().toRotationMatrix();
-      T.translation() = t3[id];
-    }
-  } else {
-    for (const auto& [id, v] : se2) {
-      if (!v.allFinite()) return Error{"g2o: solver produced a non-finite estimate for vertex " + std::to_string(id)};
-    }
-    for (auto& [id, v] : se2) v(2) = geometry::wrapAngle(v(2));
-    graph.vertices_se2 = std::move(se2);
   }
+  if (graph.numVertices() == 0) return Error{"g2o: graph has no vertices"};
+  std::set<std::int64_t> fixed = graph.fixed;
+  if (fixed.empty()) fixed.insert(graph.is_3d ? graph.vertices_se3.begin()->first : graph.vertices_se2.begin()->first);
+  for (const std::int64_t id : fixed) {
+    if (Status s = pose_graph.fixNode(id); !s) return Error{"g2o: " + s.error().message};
+  }
+  return pose_graph;
+}
+
+Result<G2oGraph> initializeFromSpanningTree(const G2oGraph& graph) {
+  auto pose_graph = toPoseGraph(graph);
+  if (!pose_graph) return pose_graph.error();
+  if (Status s = pose_graph->initializeFromSpanningTree(); !s) return s.error();
+  G2oGraph out = graph;
+  copyEstimates(*pose_graph, out);
+  return out;
+}
+
+Result<G2oGraph> initializeChordal(const G2oGraph& graph) {
+  if (graph.is_3d) return Error{"g2o: chordal initialisation is planar; this graph is 3D (use the spanning tree)"};
+  auto pose_graph = toPoseGraph(graph);
+  if (!pose_graph) return pose_graph.error();
+  if (Status s = pose_graph->initializeChordal(); !s) return s.error();
+  G2oGraph out = graph;
+  copyEstimates(*pose_graph, out);
+  return out;
+}
+
+Result<G2oSolveResult> optimizeG2o(G2oGraph& graph, const PoseGraphConfig& config) {
+  if (graph.numVertices() == 0) return Error{"g2o: graph has no vertices"};
+  if (graph.numEdges() == 0) return Error{"g2o: graph has no edges"};
+  auto pose_graph = toPoseGraph(graph, config);
+  if (!pose_graph) return pose_graph.error();
+  G2oSolveResult result;
+  result.chi2_initial = g2oChi2(graph);
+  auto solved = pose_graph->optimize();
+  if (!solved) return Error{"g2o: " + solved.error().message};
+  result.converged = solved->converged;
+  result.iterations = solved->iterations;
+  result.solve_ms = solved->solve_ms;
+  result.linear_solver = solved->linear_solver;
+  result.message = solved->message;
+  copyEstimates(*pose_graph, graph);
   result.chi2_final = g2oChi2(graph);
   return result;
 }

@@ -1,5 +1,5 @@
 #pragma once
-// Internal: Ceres linear-solver selection shared by the vehicle pose graph and the g2o optimiser.
+// Internal: Ceres linear-solver selection of the pose graph.
 
 #include <ceres/ceres.h>
 

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <sstream>
 
@@ -233,12 +234,179 @@ TEST(G2oParse, MalformedLinesRejectedWithLineNumber) {
   EXPECT_NEAR(g2oChi2(*ok), 0.0, 1e-12);
 }
 
+// A file with only EDGE_SE2 lines (intel without its VERTEX lines): the vertices come from the
+// edges, initialised along a spanning tree, and the solve reaches the same optimum as from the file.
+TEST(G2oEdgeOnly, IntelWithoutVerticesSolvesToTheReferenceChi2) {
+  const std::string text = readFile(vog::test::sharedDataDir() / "posegraph" / "intel.g2o");
+  ASSERT_FALSE(text.empty());
+  std::istringstream in(text);
+  std::string line, edges_only;
+  while (std::getline(in, line)) {
+    if (line.rfind("VERTEX", 0) != 0) edges_only += line + "\n";
+  }
+  auto with_vertices = parseG2o(text);
+  ASSERT_TRUE(with_vertices.ok()) << with_vertices.error().message;
+  auto graph = parseG2o(edges_only);
+  ASSERT_TRUE(graph.ok()) << graph.error().message;
+  EXPECT_TRUE(graph->vertices_from_edges);
+  EXPECT_FALSE(with_vertices->vertices_from_edges);
+  EXPECT_EQ(graph->numVertices(), with_vertices->numVertices());
+  EXPECT_EQ(graph->numEdges(), with_vertices->numEdges());
+  EXPECT_EQ(graph->vertices_se2.begin()->second, Eigen::Vector3d::Zero());  // first vertex at identity
+
+  auto from_file = optimizeG2o(*with_vertices);
+  ASSERT_TRUE(from_file.ok()) << from_file.error().message;
+  auto from_edges = optimizeG2o(*graph);
+  ASSERT_TRUE(from_edges.ok()) << from_edges.error().message;
+  EXPECT_NEAR(from_edges->chi2_final, from_file->chi2_final, 1e-6 * from_file->chi2_final);
+  EXPECT_NEAR(from_edges->chi2_final, 45.00469581, 1e-4 * 45.00469581);
+  // The odometry chain initialisation also works on it (intel has every consecutive edge).
+  auto odom = initializeFromOdometry(*graph);
+  ASSERT_TRUE(odom.ok()) << odom.error().message;
+}
+
+TEST(G2oEdgeOnly, BrokenChainIsInitialisedAlongTheTreeAndDisconnectedIsAnError) {
+  // Vertex 2 is reached only through 3: the odometry chain (1 -> 2) is broken, the tree is not.
+  const std::string info = " 100 0 0 100 0 100\n";
+  const std::string text = "EDGE_SE2 0 1 1 0 0" + info + "EDGE_SE2 1 3 2 0 0" + info + "EDGE_SE2 3 2 -1 0 0" + info;
+  auto graph = parseG2o(text);
+  ASSERT_TRUE(graph.ok()) << graph.error().message;
+  ASSERT_EQ(graph->numVertices(), 4u);
+  EXPECT_TRUE(graph->vertices_se2.at(2).isApprox(Eigen::Vector3d(2, 0, 0), 1e-12)) << graph->vertices_se2.at(2);
+  EXPECT_TRUE(graph->vertices_se2.at(3).isApprox(Eigen::Vector3d(3, 0, 0), 1e-12)) << graph->vertices_se2.at(3);
+  EXPECT_NEAR(g2oChi2(*graph), 0.0, 1e-18);
+  auto odom = initializeFromOdometry(*graph);
+  ASSERT_FALSE(odom.ok());
+  EXPECT_NE(odom.error().message.find("consecutive vertices 1 and 2"), std::string::npos) << odom.error().message;
+
+  // Vertices 5 and 6 are connected to each other but not to 0.
+  auto split = parseG2o(text + "EDGE_SE2 5 6 1 0 0" + info);
+  ASSERT_FALSE(split.ok());
+  EXPECT_NE(split.error().message.find("no VERTEX lines"), std::string::npos) << split.error().message;
+  EXPECT_NE(split.error().message.find("disconnected: node 5"), std::string::npos) << split.error().message;
+  // With a FIX line the tree starts there (the fixed vertex keeps the identity).
+  auto fixed = parseG2o("FIX 3\n" + text);
+  ASSERT_TRUE(fixed.ok()) << fixed.error().message;
+  EXPECT_EQ(fixed->vertices_se2.at(3), Eigen::Vector3d::Zero());
+  EXPECT_TRUE(fixed->vertices_se2.at(0).isApprox(Eigen::Vector3d(-3, 0, 0), 1e-12)) << fixed->vertices_se2.at(0);
+}
+
 TEST(G2oParse, OdometryInitialisationNeedsConsecutiveEdges) {
   auto g = parseG2o("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\nEDGE_SE2 0 2 2 0 0 1 0 0 1 0 1\n");
   ASSERT_TRUE(g.ok());
   auto o = initializeFromOdometry(*g);
   ASSERT_FALSE(o.ok());
   EXPECT_NE(o.error().message.find("0 and 1"), std::string::npos) << o.error().message;
+}
+
+// A 2D graph on a circle traversed `laps` times: ground-truth vertices, noisy odometry edges
+// (i -> i + 1) and closures to the same place one lap earlier, each edge with its own noise and the
+// matching diagonal information (seeded, deterministic).
+struct LoopScenarioParams {
+  unsigned seed = 1;
+  int per_lap = 50;
+  int laps = 3;
+  double radius_m = 10.0;
+  double sigma_xy_m = 0.05;
+  double sigma_theta_rad = 0.02;
+  int closure_every = 5;
+  double closure_sigma_xy_m = 0.05;
+  double closure_sigma_theta_rad = 0.02;
+};
+
+G2oGraph makeLoopScenario(const LoopScenarioParams& p) {
+  std::mt19937 rng(p.seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  G2oGraph graph;
+  const int n = p.per_lap * p.laps;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / p.per_lap;
+    graph.vertices_se2[i] = Eigen::Vector3d(p.radius_m * std::cos(a), p.radius_m * std::sin(a),
+                                            geometry::wrapAngle(a + std::numbers::pi / 2));
+  }
+  auto edge = [&](int i, int j, double sxy, double sth) {
+    const Eigen::Matrix3d info = Eigen::Vector3d(1.0 / (sxy * sxy), 1.0 / (sxy * sxy), 1.0 / (sth * sth)).asDiagonal();
+    const Eigen::Vector3d& a = graph.vertices_se2.at(i);
+    const Eigen::Vector3d& b = graph.vertices_se2.at(j);
+    const double c = std::cos(a(2)), s = std::sin(a(2));
+    const double dx = b(0) - a(0), dy = b(1) - a(1);
+    G2oEdgeSE2 e;
+    e.from = i;
+    e.to = j;
+    e.measurement = Eigen::Vector3d(c * dx + s * dy + sxy * g(rng), -s * dx + c * dy + sxy * g(rng),
+                                    geometry::wrapAngle(b(2) - a(2) + sth * g(rng)));
+    e.information = info;
+    graph.edges_se2.push_back(e);
+  };
+  for (int i = 0; i + 1 < n; ++i) edge(i, i + 1, p.sigma_xy_m, p.sigma_theta_rad);
+  for (int i = p.per_lap; i < n; i += p.closure_every) {
+    edge(i - p.per_lap, i, p.closure_sigma_xy_m, p.closure_sigma_theta_rad);
+  }
+  return graph;
+}
+
+double solvedChi2(G2oGraph g) {
+  auto r = optimizeG2o(g);
+  if (!r.ok()) return -1.0;
+  return r->chi2_final;
+}
+
+// Three laps of a 100-pose circle with heading noise of 0.2 rad per step (tens of degrees of
+// accumulated heading error within a lap) and a closure to the previous lap every 10 poses: from
+// odometry the solver stops in a local minimum; from the chordal initialisation it reaches the
+// optimum found from the ground truth.
+TEST(G2oInit, ChordalAvoidsTheLocalMinimumOdometryEndsIn) {
+  for (const unsigned seed : {2u, 3u}) {
+    LoopScenarioParams p;
+    p.seed = seed;
+    p.per_lap = 100;
+    p.laps = 3;
+    p.sigma_xy_m = 0.1;
+    p.sigma_theta_rad = 0.2;
+    p.closure_sigma_xy_m = 0.05;
+    p.closure_sigma_theta_rad = 0.05;
+    p.closure_every = 10;
+    const G2oGraph truth = makeLoopScenario(p);
+    const double chi2_truth = solvedChi2(truth);
+    ASSERT_GT(chi2_truth, 0.0);
+    auto odom = initializeFromOdometry(truth);
+    ASSERT_TRUE(odom.ok()) << odom.error().message;
+    const double chi2_odom = solvedChi2(*odom);
+    auto chordal = initializeChordal(truth);
+    ASSERT_TRUE(chordal.ok()) << chordal.error().message;
+    // The initialisation holds the gauge vertex and is no worse a start than odometry.
+    EXPECT_EQ(chordal->vertices_se2.at(0), truth.vertices_se2.at(0));
+    EXPECT_LT(g2oChi2(*chordal), g2oChi2(*odom)) << "seed " << seed;
+    const double chi2_chordal = solvedChi2(*chordal);
+    EXPECT_GT(chi2_odom, 2.0 * chi2_truth) << "seed " << seed << ": odometry start no longer ends in a local minimum";
+    EXPECT_NEAR(chi2_chordal, chi2_truth, 1e-6 * chi2_truth) << "seed " << seed << " odom " << chi2_odom;
+  }
+}
+
+TEST(G2oInit, ChordalRefusesDisconnectedAnd3dGraphs) {
+  LoopScenarioParams p;
+  G2oGraph graph = makeLoopScenario(p);
+  graph.vertices_se2[1000] = Eigen::Vector3d::Zero();  // no edge reaches it
+  auto chordal = initializeChordal(graph);
+  ASSERT_FALSE(chordal.ok());
+  EXPECT_NE(chordal.error().message.find("disconnected: node 1000"), std::string::npos) << chordal.error().message;
+  auto tree = initializeFromSpanningTree(graph);
+  ASSERT_FALSE(tree.ok());
+  EXPECT_NE(tree.error().message.find("disconnected: node 1000"), std::string::npos) << tree.error().message;
+  auto graph3d = parseG2o(makeSynthetic3d(7, 12).text);
+  ASSERT_TRUE(graph3d.ok()) << graph3d.error().message;
+  auto refused = initializeChordal(*graph3d);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("3D"), std::string::npos) << refused.error().message;
+  // The spanning tree handles 3D: composing exact edges would give zero chi2; noisy ones, a start
+  // from which the solve reaches the optimum found from the file's vertices.
+  auto tree3d = initializeFromSpanningTree(*graph3d);
+  ASSERT_TRUE(tree3d.ok()) << tree3d.error().message;
+  G2oGraph from_file = *graph3d;
+  auto r_file = optimizeG2o(from_file);
+  auto r_tree = optimizeG2o(*tree3d);
+  ASSERT_TRUE(r_file.ok() && r_tree.ok());
+  EXPECT_NEAR(r_tree->chi2_final, r_file->chi2_final, 1e-6 * r_file->chi2_final);
 }
 
 }  // namespace

@@ -313,5 +313,40 @@ TEST(PoseGraph, BadInputRejectedAndGraphUnchanged) {
   EXPECT_FALSE(g.pose(42).ok());
 }
 
+TEST(PoseGraph, G2oFactorsFixAndInitialisationsRejectBadInput) {
+  auto bad_config = PoseGraphConfig{};
+  bad_config.initial_trust_region_radius = 0.0;
+  auto c = PoseGraph::create(bad_config);
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.error().message.find("initial_trust_region_radius"), std::string::npos) << c.error().message;
+
+  PoseGraph g = std::move(*PoseGraph::create());
+  EXPECT_FALSE(g.initializeFromSpanningTree().ok());  // no nodes
+  ASSERT_TRUE(g.addNode(0, Pose3::Identity()).ok());
+  ASSERT_TRUE(g.addNode(1, geometry::poseFromXyzRpy(1, 0, 0, 0, 0, 0)).ok());
+  const auto missing = g.fixNode(42);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("missing node 42"), std::string::npos) << missing.error().message;
+  EXPECT_FALSE(g.addSe2Factor(0, 1, Eigen::Vector3d(std::nan(""), 0, 0), Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(g.addSe2Factor(0, 1, Eigen::Vector3d(1, 0, 0), Eigen::Matrix3d::Zero()).ok());
+  EXPECT_FALSE(g.addSe2Factor(0, 0, Eigen::Vector3d(1, 0, 0), Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(g.addSe3Factor(0, 1, Pose3::Identity(), Matrix6d::Zero()).ok());
+  EXPECT_FALSE(g.addSe3Factor(1, 7, Pose3::Identity(), Matrix6d::Identity()).ok());
+  EXPECT_EQ(g.numFactors(), 0u);
+  // Two nodes and no factor: disconnected; the estimates are unchanged.
+  const auto tree = g.initializeFromSpanningTree();
+  ASSERT_FALSE(tree.ok());
+  EXPECT_NE(tree.error().message.find("disconnected: node 1"), std::string::npos) << tree.error().message;
+  EXPECT_FALSE(g.initializeChordal().ok());
+  EXPECT_EQ((*g.estimate(1))(kX), 1.0);
+  // A 3D factor is refused by the planar chordal initialisation and composed by the tree.
+  ASSERT_TRUE(g.addSe3Factor(0, 1, geometry::poseFromXyzRpy(2, 0, 0.5, 0.1, 0, 0), Matrix6d::Identity()).ok());
+  const auto chordal = g.initializeChordal();
+  ASSERT_FALSE(chordal.ok());
+  EXPECT_NE(chordal.error().message.find("SE3 factor 0 -> 1"), std::string::npos) << chordal.error().message;
+  ASSERT_TRUE(g.initializeFromSpanningTree().ok());
+  EXPECT_TRUE(g.pose(1)->isApprox(geometry::poseFromXyzRpy(2, 0, 0.5, 0.1, 0, 0), 1e-12));
+}
+
 }  // namespace
 }  // namespace vog::slam

@@ -5,7 +5,9 @@
 //  - absolute: z, roll, pitch of one node (depth sensor and IMU);
 //  - loop closure: full 6-DOF relative pose from ICP, or partial (thesis Alg. 8, Eq. 4.2-4.4),
 //    constraining only the well-conditioned directions V_u; loop closures carry a robust loss so one
-//    wrong closure cannot bend the whole map.
+//    wrong closure cannot bend the whole map;
+//  - SE2 and SE3 relative poses with g2o's error (EDGE_SE2, EDGE_SE3:QUAT; see g2o.hpp), no robust
+//    loss: the public datasets are checked through this class, on the solver vogd runs.
 // Every residual is whitened by U = L^T with L L^T = Omega (see information.hpp).
 // Solved with Ceres (Levenberg-Marquardt, sparse normal Cholesky on SuiteSparse when that backend
 // is compiled in, else Eigen's sparse Cholesky; OptimizeResult::linear_solver says which).
@@ -18,6 +20,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +36,10 @@ struct PoseGraphConfig {
   // down-weighted.
   double loop_closure_loss_scale = 1.0;
   int max_iterations = 100;
+  // Levenberg-Marquardt's first trust-region radius; Ceres' default. A larger one makes the first
+  // steps almost Gauss-Newton, fewer iterations on graphs well inside the basin of convergence
+  // (the g2o datasets), more risk on graphs that are not.
+  double initial_trust_region_radius = 1e4;
   double function_tolerance = 1e-10;
   double gradient_tolerance = 1e-12;
   double parameter_tolerance = 1e-10;
@@ -92,6 +99,33 @@ class PoseGraph {
   // Full 6-DOF closure: T_from_to measured; information 6x6 over (x, y, z, roll, pitch, yaw).
   Status addLoopClosure(NodeId from, NodeId to, const geometry::Pose3& T_from_to, const Matrix6d& information);
   Status addPartialLoopClosure(NodeId from, NodeId to, const PartialLoopClosure& closure);
+  // Planar relative pose (x, y, theta) of `to` in `from` with g2o's EDGE_SE2 error
+  // e = t2v(Z^-1 X_from^-1 X_to) over (x, y, yaw); information 3x3 over e. No robust loss.
+  Status addSe2Factor(NodeId from, NodeId to, const Eigen::Vector3d& xy_theta, const Eigen::Matrix3d& information);
+  // 3D relative pose with g2o's EDGE_SE3:QUAT error e = (t, qx, qy, qz) of Z^-1 X_from^-1 X_to, unit
+  // quaternion with qw >= 0; information 6x6 over e. No robust loss.
+  Status addSe3Factor(NodeId from, NodeId to, const geometry::Pose3& T_from_to, const Matrix6d& information);
+  // Holds all six components of an existing node constant in optimize() (g2o's FIX).
+  Status fixNode(NodeId id);
+
+  // The roots of the initialisations below: the fixed nodes, else the first node added.
+  // Spanning-tree initialisation: breadth-first from the roots over the relative factors (factor
+  // order among a node's neighbours), each reached node set to its parent composed with the tree
+  // factor. Odometry and SE2 factors set x, y, yaw only; SE3 factors and full loop closures set all
+  // six components; partial closures are not used. Errors, changing nothing, when a node is not
+  // reachable from the roots (the graph is disconnected).
+  Status initializeFromSpanningTree();
+  // Planar linear initialisation (Carlone et al., "A fast and accurate approximation for planar pose
+  // graph optimization", IJRR 2014, with the headings as unit complex numbers (cos, sin), as in the
+  // chordal relaxation of Carlone et al., ICRA 2015): first all headings from all relative factors
+  // by one sparse linear least-squares problem (roots held), then x, y with those headings by a
+  // second one, each factor weighted by its marginal information. z, roll and pitch are kept. Uses
+  // odometry, SE2 and the (x, y, yaw) of full loop closures (exact when roll and pitch are zero, the
+  // vehicle's case, pose_vector.hpp); partial closures are not used; SE3 factors are refused (3D
+  // graphs: use the spanning tree). No iteration, so no local minimum: the start for optimize()
+  // after a long drift (a large accumulated heading error) where odometry or a spanning tree leads
+  // the solver into a wrong minimum. Errors, changing nothing, on a disconnected graph.
+  Status initializeChordal();
 
   Result<OptimizeResult> optimize();
 
@@ -106,23 +140,30 @@ class PoseGraph {
   std::vector<NodeId> nodeIds() const;
   std::size_t numNodes() const { return nodes_.size(); }
   std::size_t numFactors() const { return relative_.size() + absolute_.size(); }
+  bool isFixed(NodeId id) const { return fixed_.count(id) != 0; }
   const PoseGraphConfig& config() const { return config_; }
 
  private:
   explicit PoseGraph(const PoseGraphConfig& config) : config_(config) {}
   Status checkNodes(NodeId from, NodeId to, const char* what) const;
 
-  enum class RelativeKind { kOdometry, kLoopClosure };
-  // A relative factor: residual = sqrt_information * P * (h(from, to) - measurement) where P selects
-  // the constrained components (odometry: x, y, yaw of the planar relative pose; closures: V_u).
+  enum class RelativeKind { kOdometry, kLoopClosure, kPartialLoopClosure, kSe2, kSe3 };
+  // A relative factor. Odometry and closures: residual = sqrt_information * P * (h(from, to) -
+  // measurement) where P selects the constrained components (odometry: x, y, yaw of the planar
+  // relative pose; closures: V_u). SE2 / SE3: residual = sqrt_information * g2o error.
   struct RelativeFactor {
     RelativeKind kind;
     NodeId from;
     NodeId to;
-    Vector6d measurement;           // odometry: (dx, dy, 0, 0, 0, dyaw); closures: x_icp
-    Eigen::MatrixXd projection;     // k x 6
+    Vector6d measurement;  // odometry and SE2: (dx, dy, 0, 0, 0, dyaw); closures: x_icp; SE3: unused
+    Eigen::MatrixXd projection;        // k x 6
     Eigen::MatrixXd sqrt_information;  // k x k, upper triangular
+    geometry::Pose3 T_from_to = geometry::Pose3::Identity();  // SE3 only
   };
+  std::vector<NodeId> roots() const;
+  // Breadth-first order from the roots over the relative factors except partial closures: (node,
+  // index of its tree factor, or -1 for a root); error naming a node that is not reached.
+  Result<std::vector<std::pair<NodeId, std::ptrdiff_t>>> spanningTree() const;
   struct AbsoluteFactor {
     NodeId id;
     Eigen::Vector3d z_roll_pitch;
@@ -132,6 +173,7 @@ class PoseGraph {
   PoseGraphConfig config_;
   std::map<NodeId, Vector6d> nodes_;  // estimates, (x, y, z, roll, pitch, yaw)
   NodeId first_node_ = 0;
+  std::set<NodeId> fixed_;
   std::vector<RelativeFactor> relative_;
   std::vector<AbsoluteFactor> absolute_;
 };
