@@ -110,7 +110,9 @@ Record pd0Record(const dvl::DvlEnsemble& e) {
   if (e.bottom_track) {
     const auto bv = dvl::bottomVelocity(e);
     if (bv.ok()) {
-      r.add("bt_vx_mps", bv->velocity_mps[0]).add("bt_vy_mps", bv->velocity_mps[1]).add("bt_vz_mps", bv->velocity_mps[2]);
+      r.add("bt_vx_mps", bv->velocity_mps[0])
+          .add("bt_vy_mps", bv->velocity_mps[1])
+          .add("bt_vz_mps", bv->velocity_mps[2]);
     } else {
       r.add("bt_invalid", bv.error().message);
     }
@@ -123,7 +125,10 @@ Record pd6Record(const dvl::Pd6Sentence& s) {
       [](const auto& x) -> Record {
         using T = std::decay_t<decltype(x)>;
         if constexpr (std::is_same_v<T, dvl::Pd6Attitude>) {
-          return Record{"pd6.SA", {}}.add("pitch_deg", x.pitch_deg).add("roll_deg", x.roll_deg).add("heading_deg", x.heading_deg);
+          return Record{"pd6.SA", {}}
+              .add("pitch_deg", x.pitch_deg)
+              .add("roll_deg", x.roll_deg)
+              .add("heading_deg", x.heading_deg);
         } else if constexpr (std::is_same_v<T, dvl::Pd6TimeAndScaling>) {
           return Record{"pd6.TS", {}}
               .add("salinity_ppt", x.salinity_ppt)
@@ -131,7 +136,8 @@ Record pd6Record(const dvl::Pd6Sentence& s) {
               .add("depth_m", x.transducer_depth_m)
               .add("sound_speed_mps", x.sound_speed_mps);
         } else if constexpr (std::is_same_v<T, dvl::Pd6Velocity>) {
-          const char frame = x.frame == dvl::CoordinateFrame::kShip ? 'S' : (x.frame == dvl::CoordinateFrame::kEarth ? 'E' : 'I');
+          const char frame =
+              x.frame == dvl::CoordinateFrame::kShip ? 'S' : (x.frame == dvl::CoordinateFrame::kEarth ? 'E' : 'I');
           return Record{std::string("pd6.") + (x.bottom ? 'B' : 'W') + frame, {}}
               .add("vx_mps", x.velocity_mps[0])
               .add("vy_mps", x.velocity_mps[1])
@@ -149,11 +155,14 @@ Record pd6Record(const dvl::Pd6Sentence& s) {
 }
 
 Record digiquartzRecord(const depth::DigiquartzMessage& m) {
-  const char* kind = m.kind == depth::DigiquartzMessage::Kind::kCommand
-                         ? "digiquartz.command"
-                         : (m.kind == depth::DigiquartzMessage::Kind::kPressure ? "digiquartz.pressure" : "digiquartz.parameter");
+  const char* kind =
+      m.kind == depth::DigiquartzMessage::Kind::kCommand
+          ? "digiquartz.command"
+          : (m.kind == depth::DigiquartzMessage::Kind::kPressure ? "digiquartz.pressure" : "digiquartz.parameter");
   Record r{kind, {}};
-  r.add("destination", static_cast<std::int64_t>(m.destination)).add("source", static_cast<std::int64_t>(m.source)).add("body", m.body);
+  r.add("destination", static_cast<std::int64_t>(m.destination))
+      .add("source", static_cast<std::int64_t>(m.source))
+      .add("body", m.body);
   if (m.kind == depth::DigiquartzMessage::Kind::kPressure) r.add("value", m.value);
   return r;
 }
@@ -208,7 +217,9 @@ Record imuRecord(const imu::ImuSample& s) {
   if (s.attitude) {
     r.add("roll_rad", s.attitude->roll_rad).add("pitch_rad", s.attitude->pitch_rad).add("yaw_rad", s.attitude->yaw_rad);
   }
-  r.add("dvx_mps", s.delta_velocity_mps.x()).add("dvy_mps", s.delta_velocity_mps.y()).add("dvz_mps", s.delta_velocity_mps.z());
+  r.add("dvx_mps", s.delta_velocity_mps.x())
+      .add("dvy_mps", s.delta_velocity_mps.y())
+      .add("dvz_mps", s.delta_velocity_mps.z());
   r.add("dt_s", s.dt_s);
   return r;
 }

@@ -81,8 +81,8 @@ void addApiCommands(CLI::App& app, CommandAction& action, const CommandIo& io) {
   cmd->add_flag("--progress", snapshot->progress, "Progress on stderr even when it is not a terminal");
 
   auto cloud = std::make_shared<CloudOptions>();
-  addCommand(app, action, io, "cloud", "Fetch vogd's reconstruction and write it as binary PLY", cloud,
-             runCloudCommand, &cmd);
+  addCommand(app, action, io, "cloud", "Fetch vogd's reconstruction and write it as binary PLY", cloud, runCloudCommand,
+             &cmd);
   cmd->add_option("--out", cloud->out, "Output file, .ply")->required();
   cmd->add_flag("--progress", cloud->progress, "Progress on stderr even when it is not a terminal");
 

@@ -34,7 +34,9 @@ void ConnectionOptions::addTo(CLI::App& cmd) {
   cmd.add_option("--host", host, "vogd host")->capture_default_str();
   cmd.add_option("--port", port, "vogd API port")->capture_default_str();
   cmd.add_option("--secret-file", secret_file, "File holding the operator secret (authenticates as operator)");
-  cmd.add_option("--timeout-ms", timeout_ms, "Timeout of each call")->check(CLI::Range(1, 3600000))->capture_default_str();
+  cmd.add_option("--timeout-ms", timeout_ms, "Timeout of each call")
+      ->check(CLI::Range(1, 3600000))
+      ->capture_default_str();
   cmd.add_flag("--tls", tls, "Connect with TLS (vogd's api.tls)");
   cmd.add_option("--ca-file", ca_file, "CA certificate(s) that signed vogd's certificate, PEM (implies --tls)");
 }

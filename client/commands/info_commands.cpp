@@ -16,18 +16,25 @@ int runSubmapsCommand(const SubmapsOptions& o, const CommandIo& io) {
     return conn.client->broken() ? kExitUsage : kExitRefused;
   }
   if (!o.json) {
-    io.out << "   id  closed  scans        x_m        y_m        z_m   roll_rad  pitch_rad    yaw_rad   first_s    last_s\n";
+    io.out << "   id  closed  scans        x_m        y_m        z_m   roll_rad  pitch_rad    yaw_rad   first_s    "
+              "last_s\n";
   }
   for (const api::SubmapInfo& s : *submaps) {
     const Eigen::Vector3d t = s.T_world_submap.translation();
     const Eigen::Vector3d rpy = geometry::rpyFromRotation(s.T_world_submap.linear());
     if (o.json) {
       JsonLine line;
-      line.add("id", static_cast<unsigned>(s.id)).add("closed", s.closed).add("n_scans", static_cast<unsigned>(s.n_scans))
+      line.add("id", static_cast<unsigned>(s.id))
+          .add("closed", s.closed)
+          .add("n_scans", static_cast<unsigned>(s.n_scans))
           .add("first_stamp_ns", static_cast<std::int64_t>(s.first_stamp_ns))
           .add("last_stamp_ns", static_cast<std::int64_t>(s.last_stamp_ns))
-          .add("x_m", t.x()).add("y_m", t.y()).add("z_m", t.z())
-          .add("roll_rad", rpy.x()).add("pitch_rad", rpy.y()).add("yaw_rad", rpy.z());
+          .add("x_m", t.x())
+          .add("y_m", t.y())
+          .add("z_m", t.z())
+          .add("roll_rad", rpy.x())
+          .add("pitch_rad", rpy.y())
+          .add("yaw_rad", rpy.z());
       io.out << line.str() << '\n';
       continue;
     }

@@ -59,9 +59,12 @@ int runMissionCommand(const MissionOptions& o, const CommandIo& io) {
       JsonLine line;
       line.add("command", verb(command.kind)).add("mission_state", api::toString(*state));
       if (command.kind == Kind::kSetBox) {
-        line.add("min_x_m", command.box.min_world_m.x()).add("min_y_m", command.box.min_world_m.y())
-            .add("min_z_m", command.box.min_world_m.z()).add("max_x_m", command.box.max_world_m.x())
-            .add("max_y_m", command.box.max_world_m.y()).add("max_z_m", command.box.max_world_m.z());
+        line.add("min_x_m", command.box.min_world_m.x())
+            .add("min_y_m", command.box.min_world_m.y())
+            .add("min_z_m", command.box.min_world_m.z())
+            .add("max_x_m", command.box.max_world_m.x())
+            .add("max_y_m", command.box.max_world_m.y())
+            .add("max_z_m", command.box.max_world_m.z());
       }
       io.out << line.str() << std::endl;
     } else {

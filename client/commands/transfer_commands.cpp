@@ -53,7 +53,8 @@ int runSnapshotCommand(const SnapshotOptions& o, const CommandIo& io) {
   }
   if (o.json) {
     JsonLine line;
-    line.add("out", o.out).add("map_version", static_cast<std::uint64_t>(mirror.version()))
+    line.add("out", o.out)
+        .add("map_version", static_cast<std::uint64_t>(mirror.version()))
         .add("blocks", static_cast<std::uint64_t>(mirror.blockCount()))
         .add("known_voxels", static_cast<std::uint64_t>(mirror.knownVoxelCount()))
         .add("resolution_m", mirror.resolution());
@@ -86,8 +87,7 @@ int runCloudCommand(const CloudOptions& o, const CommandIo& io) {
     out.add("out", o.out).add("points", static_cast<std::uint64_t>(cloud->size())).add("normals", normals);
     io.out << out.str() << std::endl;
   } else {
-    io.out << "wrote " << o.out << ": " << cloud->size() << " points" << (normals ? " with normals" : "")
-           << std::endl;
+    io.out << "wrote " << o.out << ": " << cloud->size() << " points" << (normals ? " with normals" : "") << std::endl;
   }
   return kExitOk;
 }
@@ -117,16 +117,20 @@ int runTopViewCommand(const TopViewOptions& o, const CommandIo& io) {
   }
   if (o.json) {
     JsonLine line;
-    line.add("out", o.out).add("width_px", view->image.width).add("height_px", view->image.height)
-        .add("px_per_m", view->px_per_m).add("x_min_m", view->x_min_m).add("y_max_m", view->y_max_m)
-        .add("z_min_m", view->z_min_m).add("z_max_m", view->z_max_m)
+    line.add("out", o.out)
+        .add("width_px", view->image.width)
+        .add("height_px", view->image.height)
+        .add("px_per_m", view->px_per_m)
+        .add("x_min_m", view->x_min_m)
+        .add("y_max_m", view->y_max_m)
+        .add("z_min_m", view->z_min_m)
+        .add("z_max_m", view->z_max_m)
         .add("map_version", static_cast<std::uint64_t>(mirror.version()));
     io.out << line.str() << std::endl;
   } else {
     io.out << "wrote " << o.out << ": " << view->image.width << " x " << view->image.height << " px at "
-           << view->px_per_m << " px/m, x from " << view->x_min_m << " m, y up to " << view->y_max_m
-           << " m, heights " << view->z_min_m << " .. " << view->z_max_m << " m (map version " << mirror.version()
-           << ")" << std::endl;
+           << view->px_per_m << " px/m, x from " << view->x_min_m << " m, y up to " << view->y_max_m << " m, heights "
+           << view->z_min_m << " .. " << view->z_max_m << " m (map version " << mirror.version() << ")" << std::endl;
   }
   return kExitOk;
 }

@@ -15,8 +15,14 @@ void printPose(const CommandIo& io, const char* kind, std::uint64_t seq, std::in
   const double yaw = geometry::yawOf(T.linear());
   if (json) {
     JsonLine line;
-    line.add("stream", kind).add("seq", seq).add("stamp_ns", static_cast<std::int64_t>(stamp_ns))
-        .add("x_m", t.x()).add("y_m", t.y()).add("z_m", t.z()).add("yaw_rad", yaw).add("dropped", dropped);
+    line.add("stream", kind)
+        .add("seq", seq)
+        .add("stamp_ns", static_cast<std::int64_t>(stamp_ns))
+        .add("x_m", t.x())
+        .add("y_m", t.y())
+        .add("z_m", t.z())
+        .add("yaw_rad", yaw)
+        .add("dropped", dropped);
     io.out << line.str() << std::endl;
     return;
   }
@@ -32,8 +38,13 @@ void printWaypoint(const CommandIo& io, const api::Waypoint& w, bool json) {
   const double yaw = geometry::yawOf(w.T_world_target.linear());
   if (json) {
     JsonLine line;
-    line.add("seq", static_cast<std::uint64_t>(w.seq)).add("stamp_ns", static_cast<std::int64_t>(w.stamp_ns))
-        .add("x_m", t.x()).add("y_m", t.y()).add("z_m", t.z()).add("yaw_rad", yaw).add("speed_mps", w.speed_mps)
+    line.add("seq", static_cast<std::uint64_t>(w.seq))
+        .add("stamp_ns", static_cast<std::int64_t>(w.stamp_ns))
+        .add("x_m", t.x())
+        .add("y_m", t.y())
+        .add("z_m", t.z())
+        .add("yaw_rad", yaw)
+        .add("speed_mps", w.speed_mps)
         .add("dropped", static_cast<std::uint64_t>(w.dropped));
     io.out << line.str() << std::endl;
     return;
@@ -57,7 +68,7 @@ int streamLoop(ApiClient& c, const CommandIo& io, const char* command, int count
     auto m = c.nextStream(timeout);
     if (!m) {
       if (!c.broken()) {
-        if (idle_timeout_s > 0) return kExitOk;  // idle for the given time: done
+        if (idle_timeout_s > 0) return kExitOk;                                // idle for the given time: done
         if (c.lastServerError().code == v1::ERROR_CODE_UNSPECIFIED) continue;  // quiet hour: keep waiting
         detail::report(io, command, m.error().message);
         return kExitRefused;
@@ -89,7 +100,9 @@ int runWatchCommand(const WatchOptions& o, const CommandIo& io) {
     } else if (const auto* s = std::get_if<api::StatusUpdate>(&m)) {
       if (o.json) {
         JsonLine line;
-        line.add("stream", "status").add("seq", s->seq).add("mission_state", api::toString(s->status.mission_state))
+        line.add("stream", "status")
+            .add("seq", s->seq)
+            .add("mission_state", api::toString(s->status.mission_state))
             .add("planner_state", api::toString(s->status.planner_state))
             .add("n_submaps", static_cast<unsigned>(s->status.n_submaps))
             .add("map_version", static_cast<std::uint64_t>(s->status.map_version));

@@ -73,9 +73,7 @@ Status ClientConfig::validate() const {
   return {};
 }
 
-Error toError(const v1::Error& error) {
-  return Error{v1::ErrorCode_Name(error.code()) + ": " + error.message()};
-}
+Error toError(const v1::Error& error) { return Error{v1::ErrorCode_Name(error.code()) + ": " + error.message()}; }
 
 namespace {
 
@@ -232,8 +230,7 @@ Result<v1::Envelope> ApiClient::awaitResponse(std::uint64_t id) {
     if (!r) return r.error();
     v1::Envelope& e = *r;
     const auto body = e.body_case();
-    if (body == v1::Envelope::kWaypoint || body == v1::Envelope::kPoseUpdate ||
-        body == v1::Envelope::kStatusUpdate) {
+    if (body == v1::Envelope::kWaypoint || body == v1::Envelope::kPoseUpdate || body == v1::Envelope::kStatusUpdate) {
       if (streams_.size() >= config_.max_buffered_streams) {
         streams_.pop_front();
         ++dropped_streams_;
@@ -435,8 +432,7 @@ Result<api::Cloud> ApiClient::cloud(const ProgressFn& progress) {
       std::move(req), "cloud", v1::Envelope::kCloudChunk, [&](v1::Envelope& e, std::uint32_t index) -> Status {
         const v1::CloudChunk& chunk = e.cloud_chunk();
         total = chunk.points_total();
-        if (chunk.xyz_m_size() % 3 != 0 ||
-            (chunk.normals_size() != 0 && chunk.normals_size() != chunk.xyz_m_size())) {
+        if (chunk.xyz_m_size() % 3 != 0 || (chunk.normals_size() != 0 && chunk.normals_size() != chunk.xyz_m_size())) {
           return Error{"cloud: chunk " + std::to_string(index) + " has " + std::to_string(chunk.xyz_m_size()) +
                        " coordinates and " + std::to_string(chunk.normals_size()) + " normal components"};
         }

@@ -61,9 +61,7 @@ Eigen::Vector2i TopView::pixelOf(double x_m, double y_m) const {
           static_cast<int>(std::floor((y_max_m - y_m) * px_per_m))};
 }
 
-double TopView::rampOf(double z_m) const {
-  return z_max_m > z_min_m ? (z_m - z_min_m) / (z_max_m - z_min_m) : 1.0;
-}
+double TopView::rampOf(double z_m) const { return z_max_m > z_min_m ? (z_m - z_min_m) / (z_max_m - z_min_m) : 1.0; }
 
 Result<TopView> renderTopView(const api::MapMirror& mirror, const TopViewConfig& config) {
   if (Status s = config.validate(); !s.ok()) return s.error();
@@ -152,8 +150,7 @@ Result<TopView> renderTopView(const api::MapMirror& mirror, const TopViewConfig&
       if (gathered[index(q)]) continue;
       const double x = view.x_min_m + (px + 0.5) / view.px_per_m;
       const double y = view.y_max_m - (py + 0.5) / view.px_per_m;
-      const auto found = columns.find(
-          columnId(map::coordToIndex(x, inv_res), map::coordToIndex(y, inv_res)));
+      const auto found = columns.find(columnId(map::coordToIndex(x, inv_res), map::coordToIndex(y, inv_res)));
       if (found != columns.end()) pixels[index(q)] = found->second;
     }
   }

@@ -240,9 +240,8 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
     }
     snapshot_s.push_back(sw.seconds());
     voxels = 0;
-    (*map)->forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
-      voxels += (mirror.at(k).status == v.status) ? 1 : 0;
-    });
+    (*map)->forEachKnown(
+        [&](const map::VoxelKey& k, const map::VoxelValue& v) { voxels += (mirror.at(k).status == v.status) ? 1 : 0; });
     if (voxels != (*map)->knownVoxelCount() || mirror.blockCount() != (*map)->blockCount()) {
       std::fprintf(stderr, "vog-bench api: the fetched map differs from the server's\n");
       return 1;

@@ -44,9 +44,7 @@ double percentile(std::vector<double> values, double p);  // p in [0, 1]
 class Stopwatch {
  public:
   Stopwatch() : start_(std::chrono::steady_clock::now()) {}
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
 
  private:
   std::chrono::steady_clock::time_point start_;
@@ -54,7 +52,7 @@ class Stopwatch {
 
 }  // namespace vog::bench
 
-#define VOG_BENCH_COMMAND(name, help)                                                     \
-  static int vogBench_##name(const std::vector<std::string>& args);                       \
+#define VOG_BENCH_COMMAND(name, help)                                                          \
+  static int vogBench_##name(const std::vector<std::string>& args);                            \
   static const ::vog::bench::Registrar vogBenchRegistrar_##name(#name, help, vogBench_##name); \
   static int vogBench_##name(const std::vector<std::string>& args)

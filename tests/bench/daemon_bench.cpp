@@ -27,7 +27,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 std::int64_t unixNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 struct ProcSample {
@@ -88,25 +89,29 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
                                    << "\n  seed: 1\n  speedup: " << speedup
                                    << "\nmission:\n  start_on_launch: true\n  max_submaps: " << submaps
                                    << "\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n"
-                                      "api:\n  port: 0\n  secret_file: " << (dir / "secret").string() << "\n"
+                                      "api:\n  port: 0\n  secret_file: "
+                                   << (dir / "secret").string() << "\n"
                                    << "log:\n  level: warning\n";
-  vog::test::Subprocess daemon({vogd, "--config", (dir / "vogd.yaml").string(), "--mission-dir", (dir / "mission").string(),
-                                "--port-file", (dir / "port").string()},
+  vog::test::Subprocess daemon({vogd, "--config", (dir / "vogd.yaml").string(), "--mission-dir",
+                                (dir / "mission").string(), "--port-file", (dir / "port").string()},
                                {}, dir / "vogd.log");
   if (!daemon.started()) return fail("cannot start " + vogd);
   std::uint16_t port = 0;
   for (int i = 0; i < 300 && port == 0; ++i) {
     std::ifstream in(dir / "port");
     int p = 0;
-    if (in >> p) port = static_cast<std::uint16_t>(p);
-    else std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (in >> p)
+      port = static_cast<std::uint16_t>(p);
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   if (port == 0) return fail("vogd did not start listening: " + vog::test::readTextFile(dir / "vogd.log"));
 
   std::atomic<bool> stop{false};
   std::mutex mutex;
   std::vector<double> latency_ms;
-  std::vector<std::uint64_t> received(static_cast<std::size_t>(observers), 0), dropped(static_cast<std::size_t>(observers), 0);
+  std::vector<std::uint64_t> received(static_cast<std::size_t>(observers), 0),
+      dropped(static_cast<std::size_t>(observers), 0);
   std::vector<std::string> errors;
   std::vector<std::thread> threads;
   for (int i = 0; i < observers; ++i) {
@@ -137,7 +142,8 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   vog::api::MapMirror mirror;
   auto op = vog::client::ApiClient::connect("127.0.0.1", port);
   if (!op) return fail("operator: " + op.error().message);
-  if (auto r = (*op)->authenticate(vog::bench::kOperatorSecret); !r) return fail("operator authentication: " + r.error().message);
+  if (auto r = (*op)->authenticate(vog::bench::kOperatorSecret); !r)
+    return fail("operator authentication: " + r.error().message);
   std::vector<ProcSample> samples;
   const auto t0 = Clock::now();
   int tick = 0;
@@ -154,7 +160,8 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
       delta_fetch_s_max = std::max(delta_fetch_s_max, std::chrono::duration<double>(Clock::now() - f0).count());
     }
     final_state = vog::api::toString(st->mission_state);
-    if (st->mission_state == vog::api::MissionState::kComplete || st->mission_state == vog::api::MissionState::kAborted) break;
+    if (st->mission_state == vog::api::MissionState::kComplete || st->mission_state == vog::api::MissionState::kAborted)
+      break;
   }
   const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   // The whole map from scratch, as a newly connected topside view would fetch it.
@@ -175,7 +182,8 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
 
   std::vector<double> cpu_pct;
   for (std::size_t i = 1; i < samples.size(); ++i)
-    cpu_pct.push_back(100.0 * (samples[i].cpu_s - samples[i - 1].cpu_s) / std::max(1e-3, samples[i].t_s - samples[i - 1].t_s));
+    cpu_pct.push_back(100.0 * (samples[i].cpu_s - samples[i - 1].cpu_s) /
+                      std::max(1e-3, samples[i].t_s - samples[i - 1].t_s));
   double rss_sum = 0.0;
   for (const ProcSample& s : samples) rss_sum += s.rss_mb;
   for (std::uint64_t r : received) published = std::max(published, r);

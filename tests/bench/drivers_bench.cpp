@@ -102,7 +102,8 @@ VOG_BENCH_COMMAND(drivers, "Device codecs: PD0 decode MB/s, sonar range extracti
     returns = 0;
     const vog::bench::Stopwatch clock;
     for (int i = 0; i < frames; ++i) {
-      const auto scan = vog::sonar::extractRanges(sonar_frames[static_cast<std::size_t>(i) % sonar_frames.size()], config);
+      const auto scan =
+          vog::sonar::extractRanges(sonar_frames[static_cast<std::size_t>(i) % sonar_frames.size()], config);
       if (!scan.ok()) return 1;
       for (const float x : scan->range_m) returns += x != vog::geometry::RangeScan::kNoReturn ? 1 : 0;
     }

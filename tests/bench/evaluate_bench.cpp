@@ -54,7 +54,8 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   CLI::App app{"vog-bench evaluate"};
   app.add_option("--config", config_file, "the vogd configuration the mission ran with (source: sim)")->required();
   app.add_option("--mission", mission_dir, "the mission folder")->required();
-  app.add_option("--out", out_dir, "write iterations.csv, merges.csv, path.csv, map_points.csv for scripts/plot-mission");
+  app.add_option("--out", out_dir,
+                 "write iterations.csv, merges.csv, path.csv, map_points.csv for scripts/plot-mission");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
@@ -106,7 +107,8 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   for (const vog::slam::ScanInput& s : scans) {
     const auto t = truth.find(s.scan.stamp_ns);
     if (t == truth.end()) continue;
-    if (auto st = truth_grid.insertScan(t->second * fan.T_vehicle_sensor, fan, s.scan); !st) return fail(st.error().message);
+    if (auto st = truth_grid.insertScan(t->second * fan.T_vehicle_sensor, fan, s.scan); !st)
+      return fail(st.error().message);
     if (last_true) path_m += (t->second.translation() - *last_true).norm();
     last_true = t->second.translation();
     while (submap + 1 < records.size() && s.scan.stamp_ns > records[submap].last_stamp_ns) ++submap;
@@ -141,7 +143,8 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   auto observable = vog::sim::observablePoints(**world, (*world)->sampleSurface(0.1, config->sim.seed), {});
   if (!observable) return fail(observable.error().message);
   std::vector<Eigen::Vector3d> observable_in_map;
-  for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(error->T_reference_estimate.inverse() * p);
+  for (const Eigen::Vector3d& p : observable->points.points)
+    observable_in_map.push_back(error->T_reference_estimate.inverse() * p);
   std::map<std::size_t, double> coverage_at;  // n_submaps -> coverage
   for (const auto& [n, snapshot] : snapshot_at)
     coverage_at[n] = vog::bench::coverageOf(*snapshot, observable_in_map, 2 * grid.resolution_m);
@@ -177,7 +180,8 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
       for (std::size_t c = 0; c < row.size(); ++c) it << (c ? "," : "") << row[c];
       it << '\n';
     }
-    fs::copy_file(fs::path(mission_dir) / "merges.csv", fs::path(out_dir) / "merges.csv", fs::copy_options::overwrite_existing, ec);
+    fs::copy_file(fs::path(mission_dir) / "merges.csv", fs::path(out_dir) / "merges.csv",
+                  fs::copy_options::overwrite_existing, ec);
     std::ofstream pa(fs::path(out_dir) / "path.csv");
     pa << "true_x_m,true_y_m,true_z_m,est_x_m,est_y_m,est_z_m\n";
     for (const auto& [T_true, T_est] : path) {
@@ -199,7 +203,8 @@ VOG_BENCH_COMMAND(evaluate, "Score a simulated vogd mission folder against groun
   out.add("path_m", path_m);
   out.add("n_submaps", static_cast<std::int64_t>(entries.size()));
   out.add("closures", static_cast<std::int64_t>((*pipeline)->closures().size()));
-  out.add("sim_s", 1e-9 * static_cast<double>(scans.empty() ? 0 : scans.back().scan.stamp_ns - scans.front().scan.stamp_ns));
+  out.add("sim_s",
+          1e-9 * static_cast<double>(scans.empty() ? 0 : scans.back().scan.stamp_ns - scans.front().scan.stamp_ns));
   out.add("plan_iterations", static_cast<std::int64_t>(plan_ms.size()));
   out.add("plan_ms_p50", plan_ms.empty() ? 0.0 : vog::bench::median(plan_ms));
   out.add("plan_ms_p95", plan_ms.empty() ? 0.0 : vog::bench::percentile(plan_ms, 0.95));

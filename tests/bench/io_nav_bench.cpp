@@ -49,11 +49,14 @@ double serialMBps(std::size_t bytes) {
   c.device_path = link;
   vog::io::SerialTransport t(io, c, vog::io::steadyStampClock(),
                              [&](std::span<const std::uint8_t> b, std::int64_t) { received += b.size(); });
-  if (!t.start().ok() || !pump(io, [&] { return t.health().state == vog::io::LinkState::kConnected; }, 5)) return kNan;
+  if (!t.start().ok() || !pump(
+                             io, [&] { return t.health().state == vog::io::LinkState::kConnected; }, 5))
+    return kNan;
   const std::vector<std::uint8_t> payload(bytes, 0x55);
   vog::bench::Stopwatch sw;
   (*dev)->send(payload);
-  const bool ok = pump(io, [&] { return received >= bytes; }, 60);
+  const bool ok = pump(
+      io, [&] { return received >= bytes; }, 60);
   const double s = sw.seconds();
   t.stop();
   dev->reset();
@@ -79,7 +82,8 @@ double canFramesPerSecond(int frames) {
       if (::send(fd, &f, sizeof(f), 0) != static_cast<ssize_t>(sizeof(f))) return;
     }
   });
-  const bool ok = pump(io, [&] { return received >= frames; }, 60);
+  const bool ok = pump(
+      io, [&] { return received >= frames; }, 60);
   const double s = sw.seconds();
   writer.join();
   ::close(fds[1]);

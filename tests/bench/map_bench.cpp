@@ -119,23 +119,23 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   std::vector<double> line_merged_us;
   std::vector<double> line_vog_us;
   for (int rep = 0; rep < 5; ++rep) {
-    merged_ns.push_back(nsPerCall(static_cast<int>(points.size()), [&](int i) {
-      sink += snap->query(points[static_cast<std::size_t>(i)]).log_odds;
-    }));
+    merged_ns.push_back(nsPerCall(static_cast<int>(points.size()),
+                                  [&](int i) { sink += snap->query(points[static_cast<std::size_t>(i)]).log_odds; }));
     seq_ns.push_back(nsPerCall(2000, [&](int i) { sink += vog->query(points[static_cast<std::size_t>(i)]).log_odds; }));
     line_merged_us.push_back(1e-3 * nsPerCall(static_cast<int>(rays.size()), [&](int i) {
-      const auto& [a, b] = rays[static_cast<std::size_t>(i)];
-      sink += static_cast<double>(snap->lineQuery(a, b).size());
-    }));
+                               const auto& [a, b] = rays[static_cast<std::size_t>(i)];
+                               sink += static_cast<double>(snap->lineQuery(a, b).size());
+                             }));
     line_vog_us.push_back(1e-3 * nsPerCall(200, [&](int i) {
-      const auto& [a, b] = rays[static_cast<std::size_t>(i)];
-      sink += static_cast<double>(vog->lineQuery(a, b).size());
-    }));
+                            const auto& [a, b] = rays[static_cast<std::size_t>(i)];
+                            sink += static_cast<double>(vog->lineQuery(a, b).size());
+                          }));
   }
 
   if (!opt.out_dir.empty()) {
     const std::filesystem::path dir(opt.out_dir);
-    for (const auto& status : {snap->writeBt(dir / "merged.bt"), snap->writeOt(dir / "merged.ot"), vog->save(dir / "vogmap")}) {
+    for (const auto& status :
+         {snap->writeBt(dir / "merged.bt"), snap->writeOt(dir / "merged.ot"), vog->save(dir / "vogmap")}) {
       if (!status.ok()) {
         std::fprintf(stderr, "vog-bench map: %s\n", status.error().message.c_str());
         return 1;
@@ -159,8 +159,8 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   out.add("point_query_sequential_ns", bench::median(seq_ns));
   out.add("line_query_merged_us", bench::median(line_merged_us));
   out.add("line_query_vog_us", bench::median(line_vog_us));
-  out.add("merged_bytes_per_voxel",
-          static_cast<double>(snap->memoryBytes()) / static_cast<double>(std::max<std::size_t>(1, snap->knownVoxelCount())));
+  out.add("merged_bytes_per_voxel", static_cast<double>(snap->memoryBytes()) /
+                                        static_cast<double>(std::max<std::size_t>(1, snap->knownVoxelCount())));
   out.add("checksum", sink);
   std::printf("%s\n", out.str().c_str());
   return 0;

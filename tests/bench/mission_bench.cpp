@@ -3,9 +3,9 @@
 // after every map change the submap set goes to the merge thread (MergeWorker, thesis 4.5.5). The loop
 // itself is vogd's: an explore::ExplorationController stepped once per simulation step (the initial
 // spin, next-best-view plans on the newest published snapshot whenever the vehicle reached its
-// waypoints, revisits, obstructions, the way home and the ending). Lockstep determinism: the bench waits for the merge thread (waitIdle) only at
-// fixed points of simulated time: right before the next submission, right before each planning call
-// and before the final evaluation. So the snapshot the planner sees depends only on the seed, while
+// waypoints, revisits, obstructions, the way home and the ending). Lockstep determinism: the bench waits for the merge
+// thread (waitIdle) only at fixed points of simulated time: right before the next submission, right before each
+// planning call and before the final evaluation. So the snapshot the planner sees depends only on the seed, while
 // merging overlaps with simulation and mapping in between (merge_wait_ms_p95 says how long the
 // planning side still waited). Modes (thesis Table 4.3):
 //   baseline  one global OcTree built at raw odometry, Bircher-style planner (unconstrained sampling,
@@ -91,7 +91,8 @@ struct PendingScan {
 
 class ScanQueue final : public sim::SimulationSink {
  public:
-  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const Pose3& T_true, const Pose3& T_odom) override {
+  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const Pose3& T_true,
+            const Pose3& T_odom) override {
     PendingScan p;
     p.input.T_world_vehicle_odom = T_odom;
     const Eigen::Vector3d rpy = vog::geometry::rpyFromRotation(T_odom.linear());
@@ -134,7 +135,7 @@ struct IterationRow {
   std::string status;
   double best_gain = 0.0;
   int tree_size = 0;
-  double coverage = -1.0;  // computed every few iterations only
+  double coverage = -1.0;     // computed every few iterations only
   double root_shift_m = 0.0;  // distance from the estimate to the tree's root (snapped to a safe voxel)
   bool global_goal = false;   // the planner's global search chose the goal
   int global_candidates = 0;
@@ -191,7 +192,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   bool json = false;
   bool obstruction_feedback = true;
   bool same_run_global_tree = false;
-  slam::MappingPipelineConfig mc;  // library defaults; the options below override a few
+  slam::MappingPipelineConfig mc;   // library defaults; the options below override a few
   explore::ExplorationConfig loop;  // the same (vogd's loop); revisits with vog-lc only
   plan::PlannerConfig& pc = loop.planner;
   slam::RevisitConfig& revisit_config = loop.revisit;
@@ -204,7 +205,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--coverage-every", coverage_every, "compute coverage every n planning iterations")
       ->check(CLI::Range(1, 100000));
   app.add_option("--out", out_dir, "directory for iterations.csv, merges.csv, path.csv, map_points.csv");
-  app.add_option("--global-search", pc.global_search, "planner's global search when the local tree finds no gain (1/0)");
+  app.add_option("--global-search", pc.global_search,
+                 "planner's global search when the local tree finds no gain (1/0)");
   app.add_option("--global-min-gain", pc.global_min_gain, "planner: gain a global-search view needs to become a goal");
   app.add_option("--clearance", pc.clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--obstruction-feedback", obstruction_feedback,
@@ -221,7 +223,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       [&](double deg) { mc.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },
       "loop closures: largest yaw difference between a registration and its prior, deg");
   app.add_option_function<double>(
-      "--lc-max-heading-deg", [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
+      "--lc-max-heading-deg",
+      [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
       "loop closures: viewing-direction gate, deg");
   app.add_flag("--same-run-global-tree", same_run_global_tree,
                "vog / vog-lc: also score the run's scans fused into one global tree at raw odometry");
@@ -427,7 +430,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   simulation.start(queue);
   // vogd's loop (ExplorationController) from the scene's start, at simulated time 0; the estimate
   // is the truth there.
-  if (auto st = controller.start(scene->T_world_start, vog::mission::Box{scene->bounds_world.min(), scene->bounds_world.max()},
+  if (auto st = controller.start(scene->T_world_start,
+                                 vog::mission::Box{scene->bounds_world.min(), scene->bounds_world.max()},
                                  simulation.stampNs(), true);
       !st)
     return fail(st.error().message);
@@ -446,8 +450,11 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     explore::StepInput in;
     if (step.status == sim::MotionStatus::kBlocked) {
       const plan::TraversabilityGrid* g = controller.planner()->traversability();
-      CollisionRow c{simS(), simulation.vehicle().state().T_world_vehicle(), estimatedPose(),
-                     static_cast<int>(iterations.size()) - 1, pipeline.closures().size(),
+      CollisionRow c{simS(),
+                     simulation.vehicle().state().T_world_vehicle(),
+                     estimatedPose(),
+                     static_cast<int>(iterations.size()) - 1,
+                     pipeline.closures().size(),
                      g != nullptr && g->isSafe(estimatedPose().translation())};
       const auto& last_map = mode == Mode::kBaseline ? baseline_snapshot : published;
       if (last_map) c.map_clearance_m = nearestOccupiedM(*last_map, c.T_estimated.translation(), 2.0);
@@ -520,7 +527,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     }
     if (controller.ending() != explore::Ending::kNone) {
       end_reason = controller.ending() == explore::Ending::kNoPath ? controller.summary()
-                                                                  : explore::toString(controller.ending());
+                                                                   : explore::toString(controller.ending());
       break;
     }
     if (out->waypoints)
@@ -596,8 +603,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
   }
   std::vector<bool> covered_flags;
-  const double coverage = vog::bench::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
-  const double coverage_unaligned = vog::bench::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
+  const double coverage =
+      vog::bench::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
+  const double coverage_unaligned =
+      vog::bench::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
   if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
 
   if (!out_dir.empty()) {
@@ -640,7 +649,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
     mg << "sim_s,n_submaps,merge_ms,remerged\n";
-    for (const MergeRow& r : merges) mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << '\n';
+    for (const MergeRow& r : merges)
+      mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << '\n';
     std::ofstream pa(std::filesystem::path(out_dir) / "path.csv");
     pa << "true_x_m,true_y_m,true_z_m,est_x_m,est_y_m,est_z_m\n";
     for (const auto& [T_true, T_est] : path_samples) {
@@ -675,7 +685,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
   std::string reasons;
-  for (const auto& [reason, n] : lc.rejected_by_reason) reasons += (reasons.empty() ? "" : "; ") + reason + ": " + std::to_string(n);
+  for (const auto& [reason, n] : lc.rejected_by_reason)
+    reasons += (reasons.empty() ? "" : "; ") + reason + ": " + std::to_string(n);
   out.add("closures_rejected", reasons);
   out.add("sim_s", simS());
   out.add("wall_s", mission_wall_s);
@@ -685,16 +696,18 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("cpu_s", processCpuS());
   out.add("realtime_factor_cpu", simS() / processCpuS());
   out.add("plan_iterations", static_cast<std::int64_t>(plan_ms_all.size()));
-  out.add("plan_ms_mean", plan_ms_all.empty() ? 0.0 : [&] {
-    double s = 0.0;
-    for (double v : plan_ms_all) s += v;
-    return s / static_cast<double>(plan_ms_all.size());
-  }());
+  out.add(
+      "plan_ms_mean", plan_ms_all.empty() ? 0.0 : [&] {
+        double s = 0.0;
+        for (double v : plan_ms_all) s += v;
+        return s / static_cast<double>(plan_ms_all.size());
+      }());
   out.add("plan_ms_p95", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 0.95));
   out.add("plan_ms_max", plan_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_ms_all, 1.0));
   out.add("plan_cpu_ms_p95", plan_cpu_ms_all.empty() ? 0.0 : vog::bench::percentile(plan_cpu_ms_all, 0.95));
-  out.add("plan_global_searches", static_cast<std::int64_t>(std::count_if(
-                                      iterations.begin(), iterations.end(), [](const IterationRow& r) { return r.global_candidates > 0; })));
+  out.add("plan_global_searches",
+          static_cast<std::int64_t>(std::count_if(iterations.begin(), iterations.end(),
+                                                  [](const IterationRow& r) { return r.global_candidates > 0; })));
   out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
   out.add("merge_wait_ms_p95", merge_wait_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_wait_ms_all, 0.95));
   out.add("collisions", static_cast<std::int64_t>(collisions));

@@ -27,7 +27,8 @@ VOG_BENCH_COMMAND(persist, "mission persistence: submap group persist time, jour
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   namespace fs = std::filesystem;
   const bool temp = dir_arg.empty();
-  const fs::path dir = temp ? fs::temp_directory_path() / ("vog-bench-persist-" + std::to_string(::getpid())) : fs::path(dir_arg);
+  const fs::path dir =
+      temp ? fs::temp_directory_path() / ("vog-bench-persist-" + std::to_string(::getpid())) : fs::path(dir_arg);
   if (fs::exists(dir)) {
     std::fprintf(stderr, "persist: %s already exists\n", dir.c_str());
     return 1;

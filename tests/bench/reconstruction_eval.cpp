@@ -35,7 +35,8 @@ ReferenceReconstruction::ReferenceReconstruction(const map::LocalGrid& grid) : c
 
 namespace {
 
-double rmseTo(const std::vector<Eigen::Vector3d>& points, const geometry::Pose3& T, const slam::NearestNeighbours& index) {
+double rmseTo(const std::vector<Eigen::Vector3d>& points, const geometry::Pose3& T,
+              const slam::NearestNeighbours& index) {
   double sum_sq = 0.0;
   for (const Eigen::Vector3d& p : points) sum_sq += index.nearest(T * p).second;
   return std::sqrt(sum_sq / static_cast<double>(points.size()));

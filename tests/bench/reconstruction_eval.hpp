@@ -45,8 +45,8 @@ class ReferenceReconstruction {
 };
 
 struct ReconstructionError {
-  double rmse_m = 0.0;            // after the rigid alignment
-  double rmse_unaligned_m = 0.0;  // as reconstructed
+  double rmse_m = 0.0;                                                 // after the rigid alignment
+  double rmse_unaligned_m = 0.0;                                       // as reconstructed
   geometry::Pose3 T_reference_estimate = geometry::Pose3::Identity();  // the alignment
   std::size_t n_points = 0;
 };

@@ -47,7 +47,8 @@ struct RecordedRun {
 class ScanRecorder final : public sim::SimulationSink {
  public:
   explicit ScanRecorder(RecordedRun& run) : run_(run) {}
-  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const Pose3& T_true, const Pose3& T_odom) override {
+  void scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const Pose3& T_true,
+            const Pose3& T_odom) override {
     slam::ScanInput in;
     in.T_world_vehicle_odom = T_odom;
     // Depth and attitude are measured absolutely (thesis 4.2): the odometry pose carries them with
@@ -163,7 +164,8 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   app.add_option("--noise-scale", noise_scale, "factor on the odometry noise variances")->check(CLI::Range(0.0, 1e3));
   app.add_option("--max-scans", max_scans, "scans per submap (thesis Table 4.2: 100)")->check(CLI::Range(2, 100000));
   slam::MappingPipelineConfig base;  // library defaults; the options below override a few
-  app.add_option("--lc-max-fitness", base.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
+  app.add_option("--lc-max-fitness", base.loop_closer.acceptance.max_fitness_m2,
+                 "loop closures: ICP fitness bound, m^2");
   app.add_option_function<double>(
       "--lc-max-yaw-disagreement-deg",
       [&](double deg) { base.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },

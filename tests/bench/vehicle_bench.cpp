@@ -50,7 +50,8 @@ VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agr
     std::cerr << "vehicle bench: " << world.error().message << "\n";
     return 1;
   }
-  const std::filesystem::path run_dir = std::filesystem::temp_directory_path() / ("vog-bench-vehicle-" + std::to_string(::getpid()));
+  const std::filesystem::path run_dir =
+      std::filesystem::temp_directory_path() / ("vog-bench-vehicle-" + std::to_string(::getpid()));
   std::filesystem::create_directories(run_dir);
 
   vog::bench::JsonObject out;
@@ -94,10 +95,12 @@ VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agr
       return 1;
     }
     vehicle = std::move(v).value();
-    const auto ltp = *vog::backseat::LocalTangentPlane::create({config.origin_latitude_deg, config.origin_longitude_deg});
+    const auto ltp =
+        *vog::backseat::LocalTangentPlane::create({config.origin_latitude_deg, config.origin_longitude_deg});
     vog::io::TcpClientConfig tc;
     tc.port = vehicle->endpoints().backseat_port;
-    vog::io::TcpClient backseat(ioc, tc, vog::io::steadyStampClock(), [](std::span<const std::uint8_t>, std::int64_t) {});
+    vog::io::TcpClient backseat(ioc, tc, vog::io::steadyStampClock(),
+                                [](std::span<const std::uint8_t>, std::int64_t) {});
     if (!vehicle->start().ok() || !backseat.start().ok()) return 1;
     // Lane y = -1 at z = -2: to its west end, then east along it (each command replaces the last).
     const std::vector<Eigen::Vector3d> legs = {{-4.0, -1.0, -2.0}, {4.5, -1.0, -2.0}};
@@ -130,7 +133,8 @@ VOG_BENCH_COMMAND(vehicle, "vogsim vehicle: real-time pacing and sonar range agr
     out.add(k + "frames_completed", static_cast<std::int64_t>(frames));
     out.add(k + "frames_dropped", static_cast<std::int64_t>(reassembler.stats().frames_dropped));
     out.add(k + "beams_compared", static_cast<std::int64_t>(beams));
-    out.add(k + "presence_agreement", beams > 0 ? static_cast<double>(presence_agree) / static_cast<double>(beams) : 0.0);
+    out.add(k + "presence_agreement",
+            beams > 0 ? static_cast<double>(presence_agree) / static_cast<double>(beams) : 0.0);
     out.add(k + "range_error_median_m", errors.empty() ? -1.0 : vog::bench::median(errors));
     out.add(k + "range_error_p95_m", errors.empty() ? -1.0 : vog::bench::percentile(errors, 0.95));
     out.add(k + "range_error_max_m", errors.empty() ? -1.0 : vog::bench::percentile(errors, 1.0));

@@ -19,6 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   VOG_FUZZ_CHECK(scan.ok());
   VOG_FUZZ_CHECK(scan->range_m.size() == static_cast<std::size_t>(f.n_beams));
-  for (const float r : scan->range_m) VOG_FUZZ_CHECK(r == vog::geometry::RangeScan::kNoReturn || (std::isfinite(r) && r > 0.0f));
+  for (const float r : scan->range_m)
+    VOG_FUZZ_CHECK(r == vog::geometry::RangeScan::kNoReturn || (std::isfinite(r) && r > 0.0f));
   return 0;
 }

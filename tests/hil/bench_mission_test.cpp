@@ -94,11 +94,10 @@ class Bench {
     fs::create_directories(run);
     sonar_port_ = freeUdpPort();
     vogsim_ = std::make_unique<Subprocess>(
-        std::vector<std::string>{VOGSIM_EXECUTABLE, "vehicle", "--scene",
-                                 (vog::test::sourceDir() / "config/scenes/propeller.yaml").string(), "--seed", "1",
-                                 "--speedup", std::to_string(kSpeedup), "--run-dir", run.string(), "--backseat-port",
-                                 "0", "--sonar-port", std::to_string(sonar_port_), "--control",
-                                 (run / "control.sock").string(), "--no-stdin"},
+        std::vector<std::string>{
+            VOGSIM_EXECUTABLE, "vehicle", "--scene", (vog::test::sourceDir() / "config/scenes/propeller.yaml").string(),
+            "--seed", "1", "--speedup", std::to_string(kSpeedup), "--run-dir", run.string(), "--backseat-port", "0",
+            "--sonar-port", std::to_string(sonar_port_), "--control", (run / "control.sock").string(), "--no-stdin"},
         std::vector<std::string>{}, dir() / "vogsim.log");
     if (!vogsim_->started()) return ::testing::AssertionFailure() << "vogsim did not start";
     const fs::path file = run / "endpoints.yaml";
@@ -119,9 +118,11 @@ class Bench {
     y << "source: devices\n"
       << "mission:\n  max_submaps: 60\n"
       << "devices:\n  time_scale: " << kSpeedup << "\n"
-      << "  dvl: {device: " << e.dvl_device << ", baud: " << e.dvl_baud << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
-      << "  depth: {device: " << e.depth_device << ", baud: " << e.depth_baud << ", latitude_deg: " << e.depth_latitude_deg
-      << ", units_code: " << e.depth_units_code << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      << "  dvl: {device: " << e.dvl_device << ", baud: " << e.dvl_baud
+      << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
+      << "  depth: {device: " << e.depth_device << ", baud: " << e.depth_baud
+      << ", latitude_deg: " << e.depth_latitude_deg << ", units_code: " << e.depth_units_code
+      << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       << "  imu: {can_interface: \"\", unix_seqpacket: " << e.imu_unix_seqpacket << ", base_id: " << e.imu_base_id
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       << "  sonar: {bind_address: 127.0.0.1, port: " << sonar_port_ << "}\n"
@@ -175,11 +176,14 @@ class Bench {
   std::string deviceState(const std::string& device) {
     const Vogctl r = vogctl({"status", "--json"});
     std::smatch m;
-    if (r.status != 0 || !std::regex_search(r.out, m, std::regex("\"device\":\"" + device + "\",\"state\":\"([a-z]+)\"")))
+    if (r.status != 0 ||
+        !std::regex_search(r.out, m, std::regex("\"device\":\"" + device + "\",\"state\":\"([a-z]+)\"")))
       return "";
     return m[1];
   }
-  std::string control(const std::string& line) { return vog::test::controlRequest(dir() / "run" / "control.sock", line); }
+  std::string control(const std::string& line) {
+    return vog::test::controlRequest(dir() / "run" / "control.sock", line);
+  }
   std::string vogdLog() const { return vog::test::readTextFile(dir() / "vogd.log"); }
 
   Subprocess& vogd() { return *vogd_; }
@@ -200,7 +204,8 @@ TEST(BenchMission, VogdOnMockDevicesMapsSurvivesFaultsAndResumesAfterKill9) {
   ASSERT_TRUE(b.startVogd());
 
   // Navigation comes up from the raw devices (dead reckoning aligned to the vehicle's $BFNVG).
-  ASSERT_TRUE(waitUntil([&] { return b.deviceState("navigation") == "ok"; }, 30.0)) << b.vogctl({"status"}).out << b.vogdLog();
+  ASSERT_TRUE(waitUntil([&] { return b.deviceState("navigation") == "ok"; }, 30.0))
+      << b.vogctl({"status"}).out << b.vogdLog();
 
   // Without the secret the operator command is refused; with it the mission starts.
   const Vogctl refused = b.vogctl({"mission", "start", "--box", kBox});
@@ -268,7 +273,8 @@ TEST(BenchMission, VogdOnMockDevicesMapsSurvivesFaultsAndResumesAfterKill9) {
   ASSERT_TRUE(waitUntil([&] { return b.deviceState("imu") == "ok" && b.deviceState("navigation") == "ok"; }, 20.0))
       << b.vogctl({"status"}).out;
   const Vogctl after_faults = b.vogctl({"status", "--json"});
-  ASSERT_TRUE(std::regex_search(after_faults.out, m, std::regex("\"device\":\"dvl\"[^}]*\"errors\":([0-9]+)"))) << after_faults.out;
+  ASSERT_TRUE(std::regex_search(after_faults.out, m, std::regex("\"device\":\"dvl\"[^}]*\"errors\":([0-9]+)")))
+      << after_faults.out;
   EXPECT_GT(std::stol(m[1]), 0) << "the garbage was not seen";
   const long submaps_before_kill_wait = b.statusField("n_submaps");
   ASSERT_TRUE(waitUntil([&] { return b.statusField("n_submaps") > submaps_before_kill_wait; }, 60.0))

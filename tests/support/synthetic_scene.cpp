@@ -69,8 +69,8 @@ SyntheticScene SyntheticScene::pier() {
 std::vector<geometry::Pose3> orbitTrajectory(int n_scans, double radius_m, double depth_m) {
   std::vector<geometry::Pose3> poses;
   poses.reserve(static_cast<std::size_t>(n_scans));
-  const double speed = 0.25;    // m/s, thesis Table 4.2
-  const double scan_dt = 0.2;   // 5 scans/s
+  const double speed = 0.25;   // m/s, thesis Table 4.2
+  const double scan_dt = 0.2;  // 5 scans/s
   double angle = 0.0;
   double radius = radius_m;
   double depth = depth_m;

@@ -31,8 +31,8 @@ class SyntheticScene {
 
   // One sonar ping from the vehicle pose: ranges beyond fan.max_range_m are kNoReturn; gaussian range
   // noise of sigma_m (0 = exact) drawn from rng.
-  geometry::RangeScan scan(const geometry::Pose3& T_world_vehicle, const geometry::SonarFan& fan,
-                           double sigma_m, std::mt19937_64& rng) const;
+  geometry::RangeScan scan(const geometry::Pose3& T_world_vehicle, const geometry::SonarFan& fan, double sigma_m,
+                           std::mt19937_64& rng) const;
 
   // A pier: seabed at z = -4 m and a few rows of pilings.
   static SyntheticScene pier();

@@ -47,8 +47,10 @@ Status writeFileAtomically(const std::filesystem::path& file, std::string_view b
   for (std::size_t done = 0; done < bytes.size() && failed.empty();) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) failed = "error while writing " + tmp.string() + ": " + errnoText();
-    else done += static_cast<std::size_t>(n);
+    if (n <= 0)
+      failed = "error while writing " + tmp.string() + ": " + errnoText();
+    else
+      done += static_cast<std::size_t>(n);
   }
   if (failed.empty() && ::fsync(fd) != 0) failed = "cannot fsync " + tmp.string() + ": " + errnoText();
   if (::close(fd) != 0 && failed.empty()) failed = "error while closing " + tmp.string() + ": " + errnoText();

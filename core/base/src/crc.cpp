@@ -36,7 +36,9 @@ std::uint16_t crc16CcittFalse(std::span<const std::uint8_t> data, std::uint16_t 
   return crc;
 }
 
-std::uint32_t crc32Ieee(std::span<const std::uint8_t> data) { return crc32Raw(kTableIeee, data, 0xFFFFFFFFU) ^ 0xFFFFFFFFU; }
+std::uint32_t crc32Ieee(std::span<const std::uint8_t> data) {
+  return crc32Raw(kTableIeee, data, 0xFFFFFFFFU) ^ 0xFFFFFFFFU;
+}
 
 std::uint32_t crc32Novatel(std::span<const std::uint8_t> data) { return crc32Raw(kTableIeee, data, 0U); }
 

@@ -12,10 +12,10 @@ double wrapAngle(double angle_rad) {
 
 Pose3 poseFromXyzRpy(double x, double y, double z, double roll_rad, double pitch_rad, double yaw_rad) {
   Pose3 T = Pose3::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
+  T.linear() =
+      (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   T.translation() = Eigen::Vector3d(x, y, z);
   return T;
 }
@@ -44,9 +44,7 @@ bool isValidPose(const Pose3& T, double tolerance) {
   return last.isApprox(Eigen::RowVector4d(0, 0, 0, 1));
 }
 
-double translationDistance(const Pose3& a, const Pose3& b) {
-  return (a.translation() - b.translation()).norm();
-}
+double translationDistance(const Pose3& a, const Pose3& b) { return (a.translation() - b.translation()).norm(); }
 
 double rotationAngle(const Pose3& a, const Pose3& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();

@@ -105,9 +105,12 @@ void ConfigMap::number(const std::string& key, double& field, double min, double
   auto n = get(key);
   if (!n) return;
   const auto v = asNumber(*n);
-  if (!v) return reader_->fail(*n, path(key), "must be a number, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
+  if (!v)
+    return reader_->fail(*n, path(key),
+                         "must be a number, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
   if (*v < min || *v > max)
-    return reader_->fail(*n, path(key), "must be in [" + formatNumber(min) + ", " + formatNumber(max) + "], got " + formatNumber(*v));
+    return reader_->fail(*n, path(key),
+                         "must be in [" + formatNumber(min) + ", " + formatNumber(max) + "], got " + formatNumber(*v));
   field = *v;
 }
 
@@ -122,9 +125,13 @@ void ConfigMap::integer(const std::string& key, int& field, int min, int max) {
   auto n = get(key);
   if (!n) return;
   const auto v = asNumber(*n);
-  if (!v || std::floor(*v) != *v) return reader_->fail(*n, path(key), "must be an integer, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
+  if (!v || std::floor(*v) != *v)
+    return reader_->fail(*n, path(key),
+                         "must be an integer, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
   if (*v < min || *v > max)
-    return reader_->fail(*n, path(key), "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " + formatNumber(*v));
+    return reader_->fail(
+        *n, path(key),
+        "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " + formatNumber(*v));
   field = static_cast<int>(*v);
 }
 
@@ -136,10 +143,14 @@ void ConfigMap::unsignedInteger(const std::string& key, std::uint64_t& field, st
     if (!n->IsScalar() || n->Scalar().empty() || n->Scalar()[0] == '-') throw YAML::Exception(n->Mark(), "sign");
     v = n->as<std::uint64_t>();
   } catch (const YAML::Exception&) {
-    return reader_->fail(*n, path(key), "must be a non-negative integer, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
+    return reader_->fail(
+        *n, path(key),
+        "must be a non-negative integer, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
   }
   if (v < min || v > max)
-    return reader_->fail(*n, path(key), "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " + std::to_string(v));
+    return reader_->fail(
+        *n, path(key),
+        "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " + std::to_string(v));
   field = v;
 }
 
@@ -150,7 +161,8 @@ void ConfigMap::boolean(const std::string& key, bool& field) {
     if (!n->IsScalar()) throw YAML::Exception(n->Mark(), "not scalar");
     field = n->as<bool>();
   } catch (const YAML::Exception&) {
-    reader_->fail(*n, path(key), "must be true or false, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
+    reader_->fail(*n, path(key),
+                  "must be true or false, got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
   }
 }
 
@@ -175,7 +187,8 @@ void ConfigMap::choice(const std::string& key, std::string& field, std::initiali
     }
     list += (list.empty() ? "" : ", ") + std::string(a);
   }
-  reader_->fail(*n, path(key), "must be one of " + list + ", got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
+  reader_->fail(*n, path(key),
+                "must be one of " + list + ", got '" + (n->IsScalar() ? n->Scalar() : "a list or mapping") + "'");
 }
 
 void ConfigMap::vector3(const std::string& key, Eigen::Vector3d& field, double min, double max) {
@@ -187,8 +200,9 @@ void ConfigMap::vector3(const std::string& key, Eigen::Vector3d& field, double m
     const auto x = asNumber((*n)[i]);
     if (!x) return reader_->fail(*n, path(key), "element " + std::to_string(i) + " is not a number");
     if (*x < min || *x > max)
-      return reader_->fail(*n, path(key), "element " + std::to_string(i) + " must be in [" + formatNumber(min) + ", " +
-                                              formatNumber(max) + "], got " + formatNumber(*x));
+      return reader_->fail(*n, path(key),
+                           "element " + std::to_string(i) + " must be in [" + formatNumber(min) + ", " +
+                               formatNumber(max) + "], got " + formatNumber(*x));
     v[static_cast<Eigen::Index>(i)] = *x;
   }
   field = v;

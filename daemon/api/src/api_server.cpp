@@ -54,8 +54,8 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   std::unique_ptr<asio::ssl::context> tls;  // null: plain TCP
   Dispatcher dispatcher;
   tcp::acceptor acceptor;
-  bool stopped = false;                                             // io thread only
-  std::uint64_t next_session_id = 1;                                // io thread only
+  bool stopped = false;               // io thread only
+  std::uint64_t next_session_id = 1;  // io thread only
   // Open sessions, for broadcasts. A session is owned by its pending asynchronous operations (each
   // handler holds a shared_ptr), never by this map: a session holds the Core, so owning it here
   // would be a cycle that outlives an io_context stopped with sessions open.
@@ -65,8 +65,8 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   std::atomic<std::uint64_t> pose_seq{0};
   std::atomic<std::uint64_t> status_seq{0};
   // Counters read by stats() from any thread.
-  std::atomic<std::uint64_t> n_clients{0}, n_accepted{0}, n_refused{0}, n_protocol_errors{0}, n_slow{0},
-      n_drops{0}, n_waypoint_drops{0}, n_waypoints{0}, n_requests{0}, n_tls_failures{0};
+  std::atomic<std::uint64_t> n_clients{0}, n_accepted{0}, n_refused{0}, n_protocol_errors{0}, n_slow{0}, n_drops{0},
+      n_waypoint_drops{0}, n_waypoints{0}, n_requests{0}, n_tls_failures{0};
 };
 
 // One client connection.
@@ -117,8 +117,8 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
       self->close_timer_.cancel();
       if (ec) {
         ++self->core_->n_tls_failures;
-        self->core_->log(LogLevel::kWarning, self->state_.peer + ": TLS handshake failed: " + ec.message() +
-                                                 "; disconnecting");
+        self->core_->log(LogLevel::kWarning,
+                         self->state_.peer + ": TLS handshake failed: " + ec.message() + "; disconnecting");
         self->closeNow();
         return;
       }
@@ -194,10 +194,9 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
   void read() {
     if (closing_ || closed_) return;
     withStream([this](auto& stream) {
-      stream.async_read_some(asio::buffer(read_buf_), [self = shared_from_this()](const asio::error_code& ec,
-                                                                                  std::size_t n) {
-        self->onRead(ec, n);
-      });
+      stream.async_read_some(
+          asio::buffer(read_buf_),
+          [self = shared_from_this()](const asio::error_code& ec, std::size_t n) { self->onRead(ec, n); });
     });
   }
 
@@ -218,10 +217,10 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
       if (const auto* err = std::get_if<FrameError>(&r)) {
         ++core_->n_protocol_errors;
         core_->log(LogLevel::kWarning, state_.peer + ": " + err->message + "; disconnecting");
-        queueResponse(makeError(0,
-                                err->kind == FrameError::Kind::kTooLarge ? v1::ERROR_CODE_FRAME_TOO_LARGE
-                                                                         : v1::ERROR_CODE_MALFORMED_FRAME,
-                                err->message));
+        queueResponse(makeError(
+            0,
+            err->kind == FrameError::Kind::kTooLarge ? v1::ERROR_CODE_FRAME_TOO_LARGE : v1::ERROR_CODE_MALFORMED_FRAME,
+            err->message));
         beginClose();
         return;
       }
@@ -246,14 +245,14 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
     const std::uint64_t id = request.request_id();
     // Token bucket (per client): refill by elapsed time, one token per request.
     const Clock::time_point now = Clock::now();
-    tokens_ = std::min(core_->config.request_burst,
-                       tokens_ + std::chrono::duration<double>(now - last_refill_).count() *
-                                     core_->config.max_requests_per_s);
+    tokens_ =
+        std::min(core_->config.request_burst, tokens_ + std::chrono::duration<double>(now - last_refill_).count() *
+                                                            core_->config.max_requests_per_s);
     last_refill_ = now;
     if (tokens_ < 1.0) {
-      queueResponse(makeError(id, v1::ERROR_CODE_RATE_LIMITED,
-                              "more than " + std::to_string(core_->config.max_requests_per_s) +
-                                  " requests per second; request not run"));
+      queueResponse(makeError(
+          id, v1::ERROR_CODE_RATE_LIMITED,
+          "more than " + std::to_string(core_->config.max_requests_per_s) + " requests per second; request not run"));
     } else if (inFlight() >= core_->config.max_in_flight) {
       tokens_ -= 1.0;
       queueResponse(makeError(id, v1::ERROR_CODE_TOO_MANY_IN_FLIGHT,
@@ -367,19 +366,19 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
     }
     writing_ = true;
     withStream([this](auto& stream) {
-      asio::async_write(stream, asio::buffer(out_), [self = shared_from_this()](const asio::error_code& ec,
-                                                                               std::size_t) {
-        self->writing_ = false;
-        if (self->closed_) return;
-        if (ec) {
-          if (ec != asio::error::operation_aborted) {
-            self->core_->log(LogLevel::kInfo, self->state_.peer + ": write failed: " + ec.message());
-          }
-          self->closeNow();
-          return;
-        }
-        self->pump();
-      });
+      asio::async_write(stream, asio::buffer(out_),
+                        [self = shared_from_this()](const asio::error_code& ec, std::size_t) {
+                          self->writing_ = false;
+                          if (self->closed_) return;
+                          if (ec) {
+                            if (ec != asio::error::operation_aborted) {
+                              self->core_->log(LogLevel::kInfo, self->state_.peer + ": write failed: " + ec.message());
+                            }
+                            self->closeNow();
+                            return;
+                          }
+                          self->pump();
+                        });
     });
   }
 
@@ -436,8 +435,8 @@ void ApiServer::Core::accept() {
       core->sessions.emplace(id, session);
       if (refuse) {
         ++core->n_refused;
-        core->log(LogLevel::kWarning, session->peer() + ": refused, " + std::to_string(core->config.max_clients) +
-                                          " clients connected");
+        core->log(LogLevel::kWarning,
+                  session->peer() + ": refused, " + std::to_string(core->config.max_clients) + " clients connected");
       } else {
         ++core->n_accepted;
         ++core->n_clients;
@@ -492,7 +491,8 @@ Status ApiServerConfig::validate() const {
   if (close_timeout.count() < 1 || close_timeout.count() > 60000) {
     return Error{"api.close_timeout_ms: " + std::to_string(close_timeout.count()) + " is outside [1, 60000]"};
   }
-  if (tls.enabled() && tls.private_key_file.empty()) return Error{"api.tls.private_key_file: required with a certificate"};
+  if (tls.enabled() && tls.private_key_file.empty())
+    return Error{"api.tls.private_key_file: required with a certificate"};
   if (tls.handshake_timeout.count() < 1 || tls.handshake_timeout.count() > 600000) {
     return Error{"api.tls.handshake_timeout_ms: " + std::to_string(tls.handshake_timeout.count()) +
                  " is outside [1, 600000]"};
@@ -510,7 +510,8 @@ Result<std::unique_ptr<asio::ssl::context>> makeTlsContext(const TlsServerConfig
                            asio::ssl::context::no_tlsv1_1 | asio::ssl::context::single_dh_use,
                        ec);
   if (!ec) context->use_certificate_chain_file(c.certificate_chain_file.string(), ec);
-  if (ec) return Error{"api.tls.certificate_file: cannot use " + c.certificate_chain_file.string() + ": " + ec.message()};
+  if (ec)
+    return Error{"api.tls.certificate_file: cannot use " + c.certificate_chain_file.string() + ": " + ec.message()};
   context->use_private_key_file(c.private_key_file.string(), asio::ssl::context::pem, ec);
   if (ec) return Error{"api.tls.private_key_file: cannot use " + c.private_key_file.string() + ": " + ec.message()};
   if (::SSL_CTX_check_private_key(context->native_handle()) != 1)
@@ -520,9 +521,8 @@ Result<std::unique_ptr<asio::ssl::context>> makeTlsContext(const TlsServerConfig
 
 }  // namespace
 
-Result<std::unique_ptr<ApiServer>> ApiServer::create(asio::io_context& io, ApiBackend& backend,
-                                                     ApiServerConfig config, ApiLogger* logger,
-                                                     std::unique_ptr<NonceSource> nonces) {
+Result<std::unique_ptr<ApiServer>> ApiServer::create(asio::io_context& io, ApiBackend& backend, ApiServerConfig config,
+                                                     ApiLogger* logger, std::unique_ptr<NonceSource> nonces) {
   if (Status s = config.validate(); !s.ok()) return s.error();
   if (!nonces) nonces = std::make_unique<SystemNonceSource>();
   std::unique_ptr<asio::ssl::context> tls;

@@ -15,9 +15,9 @@ Mac hmacSha256(std::string_view key, std::string_view message) {
   unsigned int len = 0;
   // One-shot HMAC (OpenSSL): cannot fail for SHA-256 with in-memory inputs below INT_MAX bytes.
   assert(key.size() < INT_MAX && message.size() < INT_MAX);
-  const unsigned char* r = HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
-                                reinterpret_cast<const unsigned char*>(message.data()), message.size(), out.data(),
-                                &len);
+  const unsigned char* r =
+      HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
+           reinterpret_cast<const unsigned char*>(message.data()), message.size(), out.data(), &len);
   assert(r != nullptr && len == kMacBytes);
   (void)r;
   return out;
@@ -42,9 +42,7 @@ bool macEquals(std::string_view received, const Mac& expected) {
   return CRYPTO_memcmp(received.data(), expected.data(), expected.size()) == 0;
 }
 
-std::string_view asBytes(const Mac& mac) {
-  return {reinterpret_cast<const char*>(mac.data()), mac.size()};
-}
+std::string_view asBytes(const Mac& mac) { return {reinterpret_cast<const char*>(mac.data()), mac.size()}; }
 
 Result<std::string> SystemNonceSource::nonce(std::size_t n_bytes) {
   std::string out(n_bytes, '\0');

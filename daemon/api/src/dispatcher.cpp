@@ -169,12 +169,12 @@ Reply Dispatcher::handle(const v1::Envelope& request, SessionState& session) {
                           body == B::kSubscribe || body == B::kGetMap || body == B::kListSubmaps ||
                           body == B::kGetCloud || body == B::kMissionCommand || body == B::kGetConfig;
   if (!is_request) {
-    const std::string what = body == B::BODY_NOT_SET ? std::string("an envelope without a known request")
-                                                      : "a " + request.GetDescriptor()->FindFieldByNumber(
-                                                                   static_cast<int>(body))->name() + " message";
+    const std::string what =
+        body == B::BODY_NOT_SET
+            ? std::string("an envelope without a known request")
+            : "a " + request.GetDescriptor()->FindFieldByNumber(static_cast<int>(body))->name() + " message";
     log(LogLevel::kWarning, session.peer + ": sent " + what + "; disconnecting");
-    return errorReply(id, v1::ERROR_CODE_UNKNOWN_MESSAGE, "unknown message type: " + what + " is not a request",
-                      true);
+    return errorReply(id, v1::ERROR_CODE_UNKNOWN_MESSAGE, "unknown message type: " + what + " is not a request", true);
   }
   if (id == 0) return errorReply(0, v1::ERROR_CODE_INVALID_ARGUMENT, "request_id must be non-zero");
 
@@ -294,8 +294,8 @@ Reply Dispatcher::map(std::uint64_t id, const v1::GetMap& request) {
                           " (the daemon restarted? fetch from 0)");
   }
   const std::size_t max_blocks = (config_.max_frame_bytes - kChunkHeaderReserveBytes) / kMaxBlockWireBytes;
-  std::size_t per_chunk = request.max_blocks_per_chunk() == 0 ? config_.map_blocks_per_chunk
-                                                               : request.max_blocks_per_chunk();
+  std::size_t per_chunk =
+      request.max_blocks_per_chunk() == 0 ? config_.map_blocks_per_chunk : request.max_blocks_per_chunk();
   per_chunk = std::clamp<std::size_t>(per_chunk, 1, max_blocks);
   auto chunks = std::make_unique<MapChunks>(id, encodeMapDelta(*snapshot, request.since_version()), per_chunk);
   Reply r;
@@ -307,8 +307,8 @@ Reply Dispatcher::cloud(std::uint64_t id, const v1::GetCloud& request) {
   std::shared_ptr<const Cloud> cloud = backend_.cloud();
   if (!cloud) return errorReply(id, v1::ERROR_CODE_UNAVAILABLE, "no reconstruction yet");
   const std::size_t max_points = (config_.max_frame_bytes - kChunkHeaderReserveBytes) / kMaxPointWireBytes;
-  std::size_t per_chunk = request.max_points_per_chunk() == 0 ? config_.cloud_points_per_chunk
-                                                               : request.max_points_per_chunk();
+  std::size_t per_chunk =
+      request.max_points_per_chunk() == 0 ? config_.cloud_points_per_chunk : request.max_points_per_chunk();
   per_chunk = std::clamp<std::size_t>(per_chunk, 1, max_points);
   Reply r;
   r.chunks = std::make_unique<CloudChunks>(id, std::move(cloud), per_chunk);
@@ -326,12 +326,12 @@ Reply Dispatcher::command(std::uint64_t id, const v1::MissionCommand& request, S
   if (!command) return errorReply(id, v1::ERROR_CODE_INVALID_ARGUMENT, command.error().message);
   auto state = backend_.command(*command);
   if (!state) {
-    log(LogLevel::kInfo, session.peer + ": mission command " + toString(command->kind) +
-                             " rejected: " + state.error().message);
+    log(LogLevel::kInfo,
+        session.peer + ": mission command " + toString(command->kind) + " rejected: " + state.error().message);
     return errorReply(id, v1::ERROR_CODE_REJECTED, state.error().message);
   }
-  log(LogLevel::kInfo, session.peer + ": mission command " + toString(command->kind) + " accepted, mission " +
-                           toString(*state));
+  log(LogLevel::kInfo,
+      session.peer + ": mission command " + toString(command->kind) + " accepted, mission " + toString(*state));
   v1::Envelope out;
   out.set_request_id(id);
   out.mutable_command_result()->set_mission_state(toProto(*state));

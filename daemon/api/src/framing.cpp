@@ -61,12 +61,11 @@ FrameResult FrameDecoder::next() {
   const std::size_t available = buffer_.size() - read_;
   if (available < kFrameHeaderBytes) return FrameNeedMore{};
   const std::uint8_t* p = buffer_.data() + read_;
-  const std::uint32_t length = (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
-                               (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
+  const std::uint32_t length =
+      (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
   if (length > max_payload_bytes_) {
-    return fail(FrameError::Kind::kTooLarge, "frame length " + std::to_string(length) +
-                                                 " exceeds the maximum of " + std::to_string(max_payload_bytes_) +
-                                                 " bytes");
+    return fail(FrameError::Kind::kTooLarge, "frame length " + std::to_string(length) + " exceeds the maximum of " +
+                                                 std::to_string(max_payload_bytes_) + " bytes");
   }
   if (available - kFrameHeaderBytes < length) return FrameNeedMore{};
   v1::Envelope envelope;

@@ -44,8 +44,7 @@ v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_
       const auto idx = static_cast<std::size_t>(i);
       if (block->count(idx) == 0) continue;
       known[idx / 8] = static_cast<char>(known[idx / 8] | (1 << (i % 8)));
-      const auto value = static_cast<float>(
-          bounds.clamp(block->sum(idx)));
+      const auto value = static_cast<float>(bounds.clamp(block->sum(idx)));
       std::memcpy(values.data() + idx * sizeof(float), &value, sizeof(float));
     }
     out->set_known(std::move(known));
@@ -78,7 +77,8 @@ Status MapMirror::apply(const v1::MapDelta& delta) {
     }
   }
   // Validated: apply removals first (a block may be removed and rebuilt within one delta).
-  for (const auto& k : delta.removed()) blocks_.erase({floorDiv8(k.origin_x()), floorDiv8(k.origin_y()), floorDiv8(k.origin_z())});
+  for (const auto& k : delta.removed())
+    blocks_.erase({floorDiv8(k.origin_x()), floorDiv8(k.origin_y()), floorDiv8(k.origin_z())});
   for (const auto& b : delta.changed()) {
     Block& block = blocks_[{floorDiv8(b.origin_x()), floorDiv8(b.origin_y()), floorDiv8(b.origin_z())}];
     for (int i = 0; i < kVoxels; ++i) {
@@ -105,7 +105,8 @@ map::VoxelValue MapMirror::at(const map::VoxelKey& key) const {
 
 std::size_t MapMirror::knownVoxelCount() const {
   std::size_t n = 0;
-  for (const auto& [origin, block] : blocks_) n += static_cast<std::size_t>(std::count(block.known.begin(), block.known.end(), true));
+  for (const auto& [origin, block] : blocks_)
+    n += static_cast<std::size_t>(std::count(block.known.begin(), block.known.end(), true));
   return n;
 }
 

@@ -91,9 +91,7 @@ Result<std::unique_ptr<Daemon>> Daemon::create(const VogdConfig& config, const D
 }
 
 Daemon::Daemon(const VogdConfig& config, const DaemonOptions& options)
-    : config_(config),
-      options_(options),
-      mission_(mission::Box{config.mission.box_min_m, config.mission.box_max_m}) {}
+    : config_(config), options_(options), mission_(mission::Box{config.mission.box_min_m, config.mission.box_max_m}) {}
 
 Daemon::~Daemon() {
   requestStop();
@@ -153,11 +151,13 @@ Status Daemon::init() {
     // The vehicle is taken to be at the last waypoint sent (where its controller held it) or, without
     // one, at the newest submap's base.
     const slam::SubmapRecord& last = pipeline_->submaps().back();
-    const Pose3 T_map_resume = resume.waypoint ? fromWaypoint(Eigen::Vector3d(resume.waypoint->x_m, resume.waypoint->y_m,
-                                                                              resume.waypoint->z_m),
-                                                              resume.waypoint->yaw_rad)
-                                               : last.T_world_base;
-    alignment_ = SourceAlignment(T_map_resume, last.T_world_base * last.T_world_base_odom.inverse(), last.last_stamp_ns);
+    const Pose3 T_map_resume =
+        resume.waypoint
+            ? fromWaypoint(Eigen::Vector3d(resume.waypoint->x_m, resume.waypoint->y_m, resume.waypoint->z_m),
+                           resume.waypoint->yaw_rad)
+            : last.T_world_base;
+    alignment_ =
+        SourceAlignment(T_map_resume, last.T_world_base * last.T_world_base_odom.inverse(), last.last_stamp_ns);
     T_map_home_ = pipeline_->submaps().front().T_world_base;
     sim_start = geometry::planarPart(T_map_resume) * Pose3(Eigen::Translation3d(0, 0, T_map_resume.translation().z()));
     spdlog::info("mission {}: resumed {} submaps, {} loop closures, state {}", mission_dir_.string(),
@@ -257,7 +257,8 @@ void Daemon::mappingLoop() {
     auto update = pipeline_->feed(scan);
     if (!update) {
       const std::lock_guard lock(state_mutex_);
-      if (mapping_errors_++ < 10) spdlog::warn("mapping: scan at {} ns rejected: {}", scan.scan.stamp_ns, update.error().message);
+      if (mapping_errors_++ < 10)
+        spdlog::warn("mapping: scan at {} ns rejected: {}", scan.scan.stamp_ns, update.error().message);
     } else if (update->closed_submap || !update->moved.empty()) {
       if (auto st = persistUpdate(*update); !st) {
         fail("mission store", st.error());
@@ -340,7 +341,8 @@ Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, s
     aw.T_world_target = fromWaypoint(w.p_world, w.yaw_rad);
     aw.speed_mps = config_.planner.v_max_mps;
     api_->publishWaypoint(aw);
-    if (auto st = store_->onWaypoint({stamp_ns, w.p_world.x(), w.p_world.y(), w.p_world.z(), w.yaw_rad}); !st) return st;
+    if (auto st = store_->onWaypoint({stamp_ns, w.p_world.x(), w.p_world.y(), w.p_world.z(), w.yaw_rad}); !st)
+      return st;
   }
   return {};
 }
@@ -350,7 +352,8 @@ void Daemon::recordStateLocked(mission::MissionState state) {
                      state == mission::MissionState::kPaused;
   spdlog::info("mission: {}{}", mission::toString(state),
                state == mission::MissionState::kAborted ? " (" + mission_.reason() + ")" : std::string());
-  if (auto st = store_->onState({odometry_.stamp_ns, state}); !st) spdlog::error("mission store: {}", st.error().message);
+  if (auto st = store_->onState({odometry_.stamp_ns, state}); !st)
+    spdlog::error("mission store: {}", st.error().message);
 }
 
 void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& reason) {
@@ -358,8 +361,7 @@ void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& re
     case mission::MissionEvent::kExplorationDone:
       spdlog::info("planner: exploration ends ({}); returning home", reason);
       break;
-    case mission::MissionEvent::kArrivedHome:
-      break;
+    case mission::MissionEvent::kArrivedHome: break;
     case mission::MissionEvent::kNoPath:
       spdlog::warn("planner: {}", reason);
       mission_.setAbortReason(reason);
@@ -392,7 +394,7 @@ void Daemon::planningLoop() {
       if (stopping_) break;
       if (!mission_.active()) {
         planner_state_ = mission_.state() == mission::MissionState::kComplete ? api::PlannerState::kFinished
-                                                                                : api::PlannerState::kIdle;
+                                                                              : api::PlannerState::kIdle;
         continue;
       }
       // A mission starts once navigation is up: its home and first waypoints are the vehicle's pose.
@@ -461,7 +463,7 @@ void Daemon::planningLoop() {
       send = out->waypoints && commands == commands_ && (mission_.active() || out->waypoints->empty());
       if (mission_.active())
         planner_state_ = (send && !out->waypoints->empty()) || !in.vehicle_idle ? api::PlannerState::kFollowing
-                                                                                 : api::PlannerState::kPlanning;
+                                                                                : api::PlannerState::kPlanning;
     }
     if (send)
       if (auto st = sendWaypoints(*out->waypoints, in.stamp_ns); !st) fail("waypoints", st.error());
@@ -535,11 +537,16 @@ Status Daemon::run() {
   Watchdog watchdog(interval ? std::chrono::duration_cast<Clock::duration>(*interval)
                              : Clock::duration(std::chrono::seconds(10)));
   const Clock::time_point t_start = Clock::now();
-  watchdog.add("io", [this] { return io_beat_.load(); }, t_start);
-  watchdog.add("mapping", [this] { return mapping_beat_.load(); }, t_start);
-  watchdog.add("merge", [this] { return merge_->heartbeat(); }, t_start);
-  watchdog.add("planning", [this] { return planning_beat_.load(); }, t_start);
-  watchdog.add("source", [this] { return source_->heartbeat(); }, t_start);
+  watchdog.add(
+      "io", [this] { return io_beat_.load(); }, t_start);
+  watchdog.add(
+      "mapping", [this] { return mapping_beat_.load(); }, t_start);
+  watchdog.add(
+      "merge", [this] { return merge_->heartbeat(); }, t_start);
+  watchdog.add(
+      "planning", [this] { return planning_beat_.load(); }, t_start);
+  watchdog.add(
+      "source", [this] { return source_->heartbeat(); }, t_start);
   Clock::time_point last_ping{}, last_status{}, last_pose{};
   while (true) {
     {
@@ -600,7 +607,8 @@ Status Daemon::run() {
   asio::post(io_, [this] { io_.stop(); });
   if (io_thread_.joinable()) io_thread_.join();
   spdlog::info("stopped in {} ms ({} scans outside a mission were recorded, not mapped)",
-               std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count(), scans_.notMapped());
+               std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t_stop).count(),
+               scans_.notMapped());
   const std::lock_guard lock(state_mutex_);
   if (failure_) return *failure_;
   return {};
@@ -667,9 +675,7 @@ Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
       return r.error();
     }
     switch (command.kind) {
-      case api::MissionCommand::Kind::kStart:
-        mission_started_ = true;
-        break;
+      case api::MissionCommand::Kind::kStart: mission_started_ = true; break;
       case api::MissionCommand::Kind::kPause:
       case api::MissionCommand::Kind::kAbort:
       case api::MissionCommand::Kind::kReturnHome:
@@ -677,8 +683,7 @@ Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
         hold_requested_ = true;
         break;
       case api::MissionCommand::Kind::kSetBox:
-      case api::MissionCommand::Kind::kResume:
-        break;
+      case api::MissionCommand::Kind::kResume: break;
     }
     ++commands_;
     recordStateLocked(*r);

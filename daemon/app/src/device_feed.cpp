@@ -53,12 +53,15 @@ std::optional<DeviceId> deviceIdFromRaw(std::uint16_t raw) {
 Status DeviceFeedConfig::validate() const {
   if (Status s = depth.validate(); !s.ok()) return Error{"devices.depth." + s.error().message};
   if (Status s = imu.validate(); !s.ok()) return Error{"devices.imu." + s.error().message};
-  if (Status s = range_extraction.validate(); !s.ok()) return Error{"devices.sonar.range_extraction." + s.error().message};
+  if (Status s = range_extraction.validate(); !s.ok())
+    return Error{"devices.sonar.range_extraction." + s.error().message};
   if (Status s = nav.validate("nav"); !s.ok()) return s;
-  if (n_beams < 1 || n_beams > 4096) return Error{"devices: the fan's beam count " + std::to_string(n_beams) + " is outside [1, 4096]"};
+  if (n_beams < 1 || n_beams > 4096)
+    return Error{"devices: the fan's beam count " + std::to_string(n_beams) + " is outside [1, 4096]"};
   if (!(backseat_max_extrapolation_s >= 0.0 && backseat_max_extrapolation_s <= 10.0))
     return Error{"devices.backseat.max_extrapolation_s is outside [0, 10]"};
-  if (auto ltp = backseat::LocalTangentPlane::create(origin); !ltp) return Error{"devices.backseat.origin: " + ltp.error().message};
+  if (auto ltp = backseat::LocalTangentPlane::create(origin); !ltp)
+    return Error{"devices.backseat.origin: " + ltp.error().message};
   return {};
 }
 
@@ -185,7 +188,8 @@ void DeviceFeed::feed(DeviceId device, std::int64_t stamp_ns, std::span<const st
 
 Result<geometry::Pose3> DeviceFeed::odometryPoseAt(std::int64_t stamp_ns) const {
   if (config_.navigation == NavigationSource::kBackseat) return backseatPoseAt(stamp_ns);
-  if (config_.align_to_vehicle && !aligned_) return Error{"dead reckoning not yet aligned to the vehicle's navigation ($BFNVG)"};
+  if (config_.align_to_vehicle && !aligned_)
+    return Error{"dead reckoning not yet aligned to the vehicle's navigation ($BFNVG)"};
   return dead_reckoning_.poseAt(stamp_ns);
 }
 
@@ -300,7 +304,8 @@ void DeviceFeed::onBackseat(backseat::BackseatSentence sentence, std::int64_t st
     return;
   }
   vehicle_navigation_.push_back(v);
-  while (vehicle_navigation_.size() > 2 && stamp_ns - vehicle_navigation_.front().stamp_ns > kVehicleNavigationHistoryNs)
+  while (vehicle_navigation_.size() > 2 &&
+         stamp_ns - vehicle_navigation_.front().stamp_ns > kVehicleNavigationHistoryNs)
     vehicle_navigation_.pop_front();
   out.vehicle_navigation = v;
 

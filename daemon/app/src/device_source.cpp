@@ -103,10 +103,11 @@ struct DeviceSource::Impl {
                                                     });
     }
     if (config.imu_enabled) {
-      imu = std::make_unique<io::CanTransport>(io, config.imu, stampClock(), [this](const can_frame& f, std::int64_t t) {
-        const std::vector<std::uint8_t> bytes = imu::canFramesToBytes(std::span<const can_frame>(&f, 1));
-        onChunk(DeviceId::kImu, t, bytes);
-      });
+      imu =
+          std::make_unique<io::CanTransport>(io, config.imu, stampClock(), [this](const can_frame& f, std::int64_t t) {
+            const std::vector<std::uint8_t> bytes = imu::canFramesToBytes(std::span<const can_frame>(&f, 1));
+            onChunk(DeviceId::kImu, t, bytes);
+          });
     }
     if (config.sonar_enabled) {
       sonar = std::make_unique<io::UdpReceiver>(io, config.sonar, stampClock(), bytesTo(DeviceId::kSonar));
@@ -117,11 +118,21 @@ struct DeviceSource::Impl {
   }
 
   Status startDevices() {
-    if (dvl) { if (Status s = dvl->start(); !s.ok()) return Error{"devices.dvl: " + s.error().message}; }
-    if (depth) { if (Status s = depth->start(); !s.ok()) return Error{"devices.depth: " + s.error().message}; }
-    if (imu) { if (Status s = imu->start(); !s.ok()) return Error{"devices.imu: " + s.error().message}; }
-    if (sonar) { if (Status s = sonar->start(); !s.ok()) return Error{"devices.sonar: " + s.error().message}; }
-    if (backseat) { if (Status s = backseat->start(); !s.ok()) return Error{"devices.backseat: " + s.error().message}; }
+    if (dvl) {
+      if (Status s = dvl->start(); !s.ok()) return Error{"devices.dvl: " + s.error().message};
+    }
+    if (depth) {
+      if (Status s = depth->start(); !s.ok()) return Error{"devices.depth: " + s.error().message};
+    }
+    if (imu) {
+      if (Status s = imu->start(); !s.ok()) return Error{"devices.imu: " + s.error().message};
+    }
+    if (sonar) {
+      if (Status s = sonar->start(); !s.ok()) return Error{"devices.sonar: " + s.error().message};
+    }
+    if (backseat) {
+      if (Status s = backseat->start(); !s.ok()) return Error{"devices.backseat: " + s.error().message};
+    }
     return {};
   }
 

@@ -31,8 +31,10 @@ Result<geometry::Pose3> getPose(std::span<const std::uint8_t> bytes, std::size_t
   for (std::size_t i = 0; i < 12; ++i) {
     const double v = readF64LE(bytes, at + 8 * i);
     if (!std::isfinite(v)) return Error{std::string(what) + ": pose value " + std::to_string(i) + " is not finite"};
-    if (i < 9) T.linear()(static_cast<int>(i / 3), static_cast<int>(i % 3)) = v;
-    else T.translation()[static_cast<int>(i - 9)] = v;
+    if (i < 9)
+      T.linear()(static_cast<int>(i / 3), static_cast<int>(i % 3)) = v;
+    else
+      T.translation()[static_cast<int>(i - 9)] = v;
   }
   if (!geometry::isValidPose(T)) return Error{std::string(what) + ": the pose is not a rigid transform"};
   return T;

@@ -178,8 +178,8 @@ void SimSource::run(SourceSink& sink) {
       const geometry::Pose3 T_true_odom = step_samples.T_true * step_samples.T_odom_now.inverse();
       std::vector<sim::Waypoint> out;
       for (const SourceWaypoint& w : *waypoints) {
-        const geometry::Pose3 T = T_true_odom * geometry::poseFromXyzRpy(w.p_odom_m.x(), w.p_odom_m.y(),
-                                                                          w.p_odom_m.z(), 0.0, 0.0, w.yaw_rad);
+        const geometry::Pose3 T =
+            T_true_odom * geometry::poseFromXyzRpy(w.p_odom_m.x(), w.p_odom_m.y(), w.p_odom_m.z(), 0.0, 0.0, w.yaw_rad);
         out.push_back({T.translation(), geometry::yawOf(T.linear())});
       }
       if (auto st = simulation.vehicle().setWaypoints(std::move(out)); !st) {

@@ -33,7 +33,8 @@ void TelemetryFiles::plan(std::int64_t stamp_ns, std::size_t n_submaps, double m
 }
 
 void TelemetryFiles::merge(std::int64_t stamp_ns, const map::MergeRecord& record) {
-  merges_ << seconds(stamp_ns) << ',' << record.n_submaps << ',' << record.merge_ms << ',' << record.stats.remerged << '\n'
+  merges_ << seconds(stamp_ns) << ',' << record.n_submaps << ',' << record.merge_ms << ',' << record.stats.remerged
+          << '\n'
           << std::flush;
 }
 

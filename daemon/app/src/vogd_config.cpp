@@ -284,7 +284,8 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   tls.text("certificate_file", certificate);
   tls.text("private_key_file", key);
   if (certificate.empty() != key.empty())
-    tls.fail(certificate.empty() ? "certificate_file" : "private_key_file", "give both certificate_file and private_key_file, or neither");
+    tls.fail(certificate.empty() ? "certificate_file" : "private_key_file",
+             "give both certificate_file and private_key_file, or neither");
   if (!certificate.empty()) c.api.tls_certificate_file = base_dir / certificate;
   if (!key.empty()) c.api.tls_private_key_file = base_dir / key;
   tls.finish();

@@ -27,14 +27,15 @@ void setupLogging(const std::string& level) {
     logger = std::make_shared<spdlog::logger>("vogd", std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   }
   spdlog::set_default_logger(logger);
-  spdlog::set_level(level == "debug" ? spdlog::level::debug
+  spdlog::set_level(level == "debug"     ? spdlog::level::debug
                     : level == "warning" ? spdlog::level::warn
-                    : level == "error" ? spdlog::level::err
-                                       : spdlog::level::info);
+                    : level == "error"   ? spdlog::level::err
+                                         : spdlog::level::info);
   // libprotobuf reports malformed client messages through its own logger: route it to ours.
-  google::protobuf::SetLogHandler([](google::protobuf::LogLevel, const char* file, int line, const std::string& message) {
-    spdlog::warn("protobuf {}:{}: {}", file, line, message);
-  });
+  google::protobuf::SetLogHandler(
+      [](google::protobuf::LogLevel, const char* file, int line, const std::string& message) {
+        spdlog::warn("protobuf {}:{}: {}", file, line, message);
+      });
 }
 
 }  // namespace
@@ -73,10 +74,11 @@ int main(int argc, char** argv) {
       spdlog::error("{}", stats.error().message);
       return 1;
     }
-    spdlog::info("replayed {} scans: {} submaps, {} loop closures ({} records skipped, {} scans rejected, {} outside the "
-                 "mission); {}/map.bt",
-                 stats->scans, stats->submaps, stats->closures, stats->skipped_records, stats->rejected_scans,
-                 stats->not_mapped, out_dir);
+    spdlog::info(
+        "replayed {} scans: {} submaps, {} loop closures ({} records skipped, {} scans rejected, {} outside the "
+        "mission); {}/map.bt",
+        stats->scans, stats->submaps, stats->closures, stats->skipped_records, stats->rejected_scans, stats->not_mapped,
+        out_dir);
     return 0;
   }
 

@@ -24,7 +24,8 @@ Status WaypointFollowerConfig::validate() const {
   auto bad = [](const char* key, double v, const char* range) {
     return Error{std::string("devices.backseat.") + key + ": " + std::to_string(v) + " is outside " + range};
   };
-  if (!(arrival_tolerance_m > 0.0 && arrival_tolerance_m <= 10.0)) return bad("arrival_tolerance_m", arrival_tolerance_m, "(0, 10]");
+  if (!(arrival_tolerance_m > 0.0 && arrival_tolerance_m <= 10.0))
+    return bad("arrival_tolerance_m", arrival_tolerance_m, "(0, 10]");
   if (!(arrival_tolerance_rad > 0.0 && arrival_tolerance_rad <= std::numbers::pi))
     return bad("arrival_tolerance_deg", arrival_tolerance_rad * 180.0 / std::numbers::pi, "(0, 180]");
   if (!(arrival_max_speed_mps > 0.0 && arrival_max_speed_mps <= 10.0))
@@ -43,7 +44,8 @@ void WaypointFollower::setWaypoints(std::vector<SourceWaypoint> waypoints_odom) 
   hold_pending_ = waypoints_.empty();
 }
 
-void WaypointFollower::onNavigation(const VehicleNavigation& navigation, const std::optional<geometry::Pose3>& T_odom_vehicle) {
+void WaypointFollower::onNavigation(const VehicleNavigation& navigation,
+                                    const std::optional<geometry::Pose3>& T_odom_vehicle) {
   navigation_ = navigation;
   if (T_odom_vehicle) {
     T_nav_odom_ = geometry::planarPart(navigation.T_world_vehicle) * geometry::planarPart(*T_odom_vehicle).inverse();
@@ -123,7 +125,8 @@ std::vector<std::string> WaypointFollower::poll(std::int64_t now_ns, backseat::T
   while (!waypoints_.empty() && !outstanding_id_) {
     if (!front_commanded_) {
       const geometry::Pose3 T_nav = T_nav_odom_ * poseOf(waypoints_.front());
-      const std::optional<std::string> s = command({T_nav.translation(), geometry::yawOf(T_nav.linear())}, now_ns, time);
+      const std::optional<std::string> s =
+          command({T_nav.translation(), geometry::yawOf(T_nav.linear())}, now_ns, time);
       if (!s) break;
       out.push_back(*s);
       front_commanded_ = true;
@@ -134,8 +137,8 @@ std::vector<std::string> WaypointFollower::poll(std::int64_t now_ns, backseat::T
       if (now_ns > deadline_ns_ && navigation_) {
         ++stats_.timeouts;
         const geometry::Pose3 T_odom_nav = T_nav_odom_.inverse();
-        obstruction_ = SourceObstruction{T_odom_nav * navigation_->T_world_vehicle.translation(),
-                                         T_odom_nav * target_->p_odom_m};
+        obstruction_ =
+            SourceObstruction{T_odom_nav * navigation_->T_world_vehicle.translation(), T_odom_nav * target_->p_odom_m};
         const Eigen::Vector3d p = navigation_->T_world_vehicle.translation();
         std::ostringstream why;
         why.setf(std::ios::fixed);

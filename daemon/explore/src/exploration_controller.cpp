@@ -164,14 +164,11 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
   if (!result) return result.error();
   out.plan = *result;
   switch (result->status) {
-    case plan::PlanStatus::kNoPath:
-      end(Ending::kNoPath, result->reason, out);
-      return out;
+    case plan::PlanStatus::kNoPath: end(Ending::kNoPath, result->reason, out); return out;
     case plan::PlanStatus::kComplete:  // nothing left to explore: the plan is the way home
       goHome(Ending::kComplete, *result, out);
       return out;
-    case plan::PlanStatus::kExplore:
-      break;
+    case plan::PlanStatus::kExplore: break;
   }
   if (result->waypoints.empty() || ++idle_plans_ > config_.max_idle_plans) {
     end(Ending::kStalled,

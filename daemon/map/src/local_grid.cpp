@@ -33,7 +33,9 @@ struct CloudAdaptor {
   std::size_t kdtree_get_point_count() const { return pts.size(); }
   double kdtree_get_pt(std::size_t i, std::size_t dim) const { return pts[i][static_cast<Eigen::Index>(dim)]; }
   template <class BBox>
-  bool kdtree_get_bbox(BBox&) const { return false; }
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
 };
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3>;
 
@@ -55,7 +57,8 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::create(const GridConfig& config) {
   return std::unique_ptr<LocalGrid>(new LocalGrid(config, std::make_unique<octomap::OcTree>(config.resolution_m)));
 }
 
-Result<std::unique_ptr<LocalGrid>> LocalGrid::fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree) {
+Result<std::unique_ptr<LocalGrid>> LocalGrid::fromTree(const GridConfig& config,
+                                                       std::unique_ptr<octomap::OcTree> tree) {
   if (auto s = config.validate(); !s) return s.error();
   if (!tree) return Error{"LocalGrid::fromTree: no tree"};
   if (std::abs(tree->getResolution() - config.resolution_m) > 1e-9) {
@@ -205,7 +208,8 @@ void LocalGrid::computeKnownBox() {
 Eigen::AlignedBox3d LocalGrid::knownBox() const {
   if (known_keys_.empty()) return Eigen::AlignedBox3d();  // empty box
   const double r = config_.resolution_m;
-  return Eigen::AlignedBox3d(known_keys_.min.cast<double>() * r, (known_keys_.max.cast<double>().array() + 1.0).matrix() * r);
+  return Eigen::AlignedBox3d(known_keys_.min.cast<double>() * r,
+                             (known_keys_.max.cast<double>().array() + 1.0).matrix() * r);
 }
 
 Eigen::Vector3d LocalGrid::cloudCentroid() const {

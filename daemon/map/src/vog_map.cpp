@@ -208,8 +208,8 @@ Status VogMap::save(const std::filesystem::path& dir) const {
     if (auto s = e.grid->save(dir / submapFileName(e.id)); !s) return s;
     const Eigen::Quaterniond q(e.T_world_submap.linear());
     const Eigen::Vector3d t = e.T_world_submap.translation();
-    poses << e.id << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z()
-          << ' ' << q.w() << '\n';
+    poses << e.id << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
+          << q.w() << '\n';
   }
   if (!poses) return Error{"cannot write " + (dir / "poses.txt").string()};
   return {};
@@ -225,17 +225,28 @@ Result<std::unique_ptr<VogMap>> VogMap::load(const std::filesystem::path& dir) {
     while (grid >> key) {
       ++line;
       double value = 0.0;
-      if (!(grid >> value)) return Error{(dir / "grid.txt").string() + ":" + std::to_string(line) + ": bad value for " + key};
-      if (key == "resolution_m") config.resolution_m = value;
-      else if (key == "prob_hit") config.prob_hit = value;
-      else if (key == "prob_miss") config.prob_miss = value;
-      else if (key == "clamp_min") config.clamp_min = value;
-      else if (key == "clamp_max") config.clamp_max = value;
-      else if (key == "occupancy_threshold") config.occupancy_threshold = value;
-      else if (key == "max_range_m") config.max_range_m = value;
-      else if (key == "cloud_voxel_m") config.cloud_voxel_m = value;
-      else if (key == "normal_neighbours") config.normal_neighbours = static_cast<int>(value);
-      else return Error{(dir / "grid.txt").string() + ":" + std::to_string(line) + ": unknown key " + key};
+      if (!(grid >> value))
+        return Error{(dir / "grid.txt").string() + ":" + std::to_string(line) + ": bad value for " + key};
+      if (key == "resolution_m")
+        config.resolution_m = value;
+      else if (key == "prob_hit")
+        config.prob_hit = value;
+      else if (key == "prob_miss")
+        config.prob_miss = value;
+      else if (key == "clamp_min")
+        config.clamp_min = value;
+      else if (key == "clamp_max")
+        config.clamp_max = value;
+      else if (key == "occupancy_threshold")
+        config.occupancy_threshold = value;
+      else if (key == "max_range_m")
+        config.max_range_m = value;
+      else if (key == "cloud_voxel_m")
+        config.cloud_voxel_m = value;
+      else if (key == "normal_neighbours")
+        config.normal_neighbours = static_cast<int>(value);
+      else
+        return Error{(dir / "grid.txt").string() + ":" + std::to_string(line) + ": unknown key " + key};
     }
   }
   auto map = create(config);

@@ -167,7 +167,8 @@ Result<JournalRecord> decodeOptimizedPoses(ByteReader& in) {
   }
   if (Status s = finish(in, kType); !s.ok()) return s.error();
   for (const auto& [id, x] : r.estimates) {
-    if (!x.allFinite()) return Error{std::string(kType) + " record: estimate of node " + std::to_string(id) + " is not finite"};
+    if (!x.allFinite())
+      return Error{std::string(kType) + " record: estimate of node " + std::to_string(id) + " is not finite"};
   }
   return JournalRecord{std::move(r)};
 }

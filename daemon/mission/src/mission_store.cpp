@@ -69,7 +69,8 @@ Result<Replay> replay(const JournalContents& journal) {
       }
       const auto expected = static_cast<std::int64_t>(out.submaps.size());
       if (s->index != expected) {
-        return Error{at(e.offset) + ": submap index " + std::to_string(s->index) + ", expected " + std::to_string(expected)};
+        return Error{at(e.offset) + ": submap index " + std::to_string(s->index) + ", expected " +
+                     std::to_string(expected)};
       }
       open_submap = *s;
       open_offset = e.offset;
@@ -190,10 +191,12 @@ Status MissionStore::onSubmapClosed(const slam::ClosedSubmap& closed) {
   std::lock_guard lock(mutex_);
   if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
   if (!staged_.empty()) {
-    return Error{"mission store: submap " + std::to_string(closed.index) + " closed before the previous one was committed"};
+    return Error{"mission store: submap " + std::to_string(closed.index) +
+                 " closed before the previous one was committed"};
   }
   if (closed.index != next_index_) {
-    return Error{"mission store: submap index " + std::to_string(closed.index) + ", expected " + std::to_string(next_index_)};
+    return Error{"mission store: submap index " + std::to_string(closed.index) + ", expected " +
+                 std::to_string(next_index_)};
   }
   if (!closed.grid || !closed.grid->finalized()) {
     return Error{"mission store: submap " + std::to_string(closed.index) + " has no finalized grid"};

@@ -48,8 +48,8 @@ Result<std::unique_ptr<RawLog>> RawLog::open(const std::filesystem::path& path, 
 
 Status RawLog::append(std::uint16_t device_id, std::int64_t stamp_ns, std::span<const std::uint8_t> bytes) {
   if (bytes.size() > kMaxRecordPayloadBytes - kRawHeaderBytes) {
-    return Error{"raw log: chunk of " + std::to_string(bytes.size()) + " bytes from device " + std::to_string(device_id) +
-                 " exceeds " + std::to_string(kMaxRecordPayloadBytes - kRawHeaderBytes)};
+    return Error{"raw log: chunk of " + std::to_string(bytes.size()) + " bytes from device " +
+                 std::to_string(device_id) + " exceeds " + std::to_string(kMaxRecordPayloadBytes - kRawHeaderBytes)};
   }
   std::vector<std::uint8_t> payload;
   ByteWriter w(payload);

@@ -28,8 +28,8 @@ Eigen::Matrix3d rotationFromRpy(double roll, double pitch, double yaw) {
 // RDI ship coordinates: x starboard, y forward, z up; as vehicle (forward, left, up) vectors.
 Eigen::Matrix3d vehicleFromShip() {
   Eigen::Matrix3d m;
-  m << 0, 1, 0,   //
-      -1, 0, 0,   //
+  m << 0, 1, 0,  //
+      -1, 0, 0,  //
       0, 0, 1;
   return m;
 }
@@ -56,17 +56,17 @@ Status DeadReckoningConfig::validate(const std::string& prefix) const {
     if (!(std::isfinite(v) && v >= 0.0)) return Error{prefix + "." + key + " must be >= 0, got " + fmt(v)};
     return Status::success();
   };
-  for (const auto& [v, key] : {std::pair{dvl_mount_roll_rad, "dvl_mount_roll_rad"},
-                               std::pair{dvl_mount_pitch_rad, "dvl_mount_pitch_rad"},
-                               std::pair{dvl_mount_yaw_rad, "dvl_mount_yaw_rad"}}) {
+  for (const auto& [v, key] :
+       {std::pair{dvl_mount_roll_rad, "dvl_mount_roll_rad"}, std::pair{dvl_mount_pitch_rad, "dvl_mount_pitch_rad"},
+        std::pair{dvl_mount_yaw_rad, "dvl_mount_yaw_rad"}}) {
     if (!std::isfinite(v) || std::abs(v) > 2 * M_PI) {
       return Error{prefix + "." + key + " must be finite and within [-2 pi, 2 pi], got " + fmt(v)};
     }
   }
-  for (const auto& [v, key] : {std::pair{imu_max_gap_s, "imu_max_gap_s"}, std::pair{imu_timeout_s, "imu_timeout_s"},
-                               std::pair{dvl_timeout_s, "dvl_timeout_s"}, std::pair{depth_timeout_s, "depth_timeout_s"},
-                               std::pair{max_error_velocity_mps, "max_error_velocity_mps"},
-                               std::pair{max_speed_mps, "max_speed_mps"}}) {
+  for (const auto& [v, key] :
+       {std::pair{imu_max_gap_s, "imu_max_gap_s"}, std::pair{imu_timeout_s, "imu_timeout_s"},
+        std::pair{dvl_timeout_s, "dvl_timeout_s"}, std::pair{depth_timeout_s, "depth_timeout_s"},
+        std::pair{max_error_velocity_mps, "max_error_velocity_mps"}, std::pair{max_speed_mps, "max_speed_mps"}}) {
     Status s = positive(v, key);
     if (!s.ok()) return s;
   }
@@ -79,7 +79,8 @@ Status DeadReckoningConfig::validate(const std::string& prefix) const {
 
 DeadReckoning::DeadReckoning(DeadReckoningConfig config)
     : config_(config),
-      R_vehicle_dvl_(rotationFromRpy(config.dvl_mount_roll_rad, config.dvl_mount_pitch_rad, config.dvl_mount_yaw_rad)) {}
+      R_vehicle_dvl_(rotationFromRpy(config.dvl_mount_roll_rad, config.dvl_mount_pitch_rad, config.dvl_mount_yaw_rad)) {
+}
 
 Status DeadReckoning::reject(std::uint64_t& counter, std::string reason) {
   ++counter;
@@ -89,8 +90,8 @@ Status DeadReckoning::reject(std::uint64_t& counter, std::string reason) {
 
 Status DeadReckoning::addImu(const imu::ImuSample& sample) {
   if (sample.stamp_ns <= last_imu_ns_) {
-    return reject(imu_rejected_, "imu sample at " + std::to_string(sample.stamp_ns) + " ns is not after the previous (" +
-                                     std::to_string(last_imu_ns_) + " ns)");
+    return reject(imu_rejected_, "imu sample at " + std::to_string(sample.stamp_ns) +
+                                     " ns is not after the previous (" + std::to_string(last_imu_ns_) + " ns)");
   }
   if (sample.status != 0) {
     std::ostringstream status;
@@ -108,7 +109,8 @@ Status DeadReckoning::addImu(const imu::ImuSample& sample) {
   attitudes_.push_back(
       Attitude{sample.stamp_ns, Eigen::Quaterniond(worldFromNedAttitude(a.roll_rad, a.pitch_rad, a.yaw_rad))});
   // Keep about one second (plus two samples) for aligning late DVL stamps.
-  while (attitudes_.size() > 2 && attitudes_.back().stamp_ns - attitudes_[1].stamp_ns > static_cast<std::int64_t>(kNsPerS)) {
+  while (attitudes_.size() > 2 &&
+         attitudes_.back().stamp_ns - attitudes_[1].stamp_ns > static_cast<std::int64_t>(kNsPerS)) {
     attitudes_.pop_front();
   }
   return Status::success();
@@ -129,7 +131,9 @@ Status DeadReckoning::addDepth(const depth::DepthSample& sample) {
 }
 
 Status DeadReckoning::addDvl(const dvl::DvlEnsemble& ensemble) {
-  if (!ensemble.bottom_track) return reject(dvl_rejected_, "dvl ensemble " + std::to_string(ensemble.variable.ensemble_number) + " has no bottom track");
+  if (!ensemble.bottom_track)
+    return reject(dvl_rejected_,
+                  "dvl ensemble " + std::to_string(ensemble.variable.ensemble_number) + " has no bottom track");
   const dvl::DvlBottomTrack& bt = *ensemble.bottom_track;
   dvl::BottomVelocity v;
   v.stamp_ns = ensemble.stamp_ns;
@@ -175,15 +179,16 @@ Result<Eigen::Quaterniond> DeadReckoning::attitudeAt(std::int64_t stamp_ns) cons
   if (after->stamp_ns - before.stamp_ns > max_gap_ns) {
     return Error{"imu gap of " + fmt(seconds(after->stamp_ns - before.stamp_ns)) + " s around the dvl stamp"};
   }
-  const double f = static_cast<double>(stamp_ns - before.stamp_ns) / static_cast<double>(after->stamp_ns - before.stamp_ns);
+  const double f =
+      static_cast<double>(stamp_ns - before.stamp_ns) / static_cast<double>(after->stamp_ns - before.stamp_ns);
   return before.q_world_vehicle.slerp(f, after->q_world_vehicle);
 }
 
 Status DeadReckoning::addDvl(const dvl::BottomVelocity& velocity) {
   if (!velocity.valid) return reject(dvl_rejected_, "dvl bottom velocity marked invalid");
   if (velocity.stamp_ns <= last_dvl_ns_) {
-    return reject(dvl_rejected_, "dvl sample at " + std::to_string(velocity.stamp_ns) + " ns is not after the previous (" +
-                                     std::to_string(last_dvl_ns_) + " ns)");
+    return reject(dvl_rejected_, "dvl sample at " + std::to_string(velocity.stamp_ns) +
+                                     " ns is not after the previous (" + std::to_string(last_dvl_ns_) + " ns)");
   }
   if (velocity.frame == dvl::CoordinateFrame::kBeam) return reject(dvl_rejected_, "dvl velocity in beam coordinates");
   const Eigen::Vector3d v(velocity.velocity_mps[0], velocity.velocity_mps[1], velocity.velocity_mps[2]);
@@ -191,7 +196,8 @@ Status DeadReckoning::addDvl(const dvl::BottomVelocity& velocity) {
     return reject(dvl_rejected_, "dvl velocity not finite");
   }
   if (v.norm() > config_.max_speed_mps) {
-    return reject(dvl_rejected_, "dvl speed " + fmt(v.norm()) + " m/s above nav.max_speed_mps " + fmt(config_.max_speed_mps));
+    return reject(dvl_rejected_,
+                  "dvl speed " + fmt(v.norm()) + " m/s above nav.max_speed_mps " + fmt(config_.max_speed_mps));
   }
   if (std::abs(velocity.error_velocity_mps) > config_.max_error_velocity_mps) {
     return reject(dvl_rejected_, "dvl error velocity " + fmt(velocity.error_velocity_mps) +
@@ -259,7 +265,8 @@ NavSolution DeadReckoning::solution(std::int64_t now_ns) const {
   s.degraded = !reason.empty();
   s.reason = reason;
   s.T_world_vehicle = geometry::Pose3::Identity();
-  if (!attitudes_.empty()) s.T_world_vehicle.linear() = attitudes_.back().q_world_vehicle.normalized().toRotationMatrix();
+  if (!attitudes_.empty())
+    s.T_world_vehicle.linear() = attitudes_.back().q_world_vehicle.normalized().toRotationMatrix();
   s.T_world_vehicle.translation() = Eigen::Vector3d(xy_m_.x(), xy_m_.y(), -depth_m_);  // z up, depth down
   s.velocity_world_mps = v_world_mps_;
   // Per axis: half of the drift term (it spreads over both axes).

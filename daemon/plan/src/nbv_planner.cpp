@@ -72,7 +72,8 @@ const char* toString(PlanStatus status) {
 Result<std::unique_ptr<NbvPlanner>> NbvPlanner::create(const PlannerConfig& config, const Waypoint& home) {
   if (Status s = config.validate(); !s.ok()) return s.error();
   if (!home.p_world.allFinite() || !std::isfinite(home.yaw_rad))
-    return Error{"plan: home pose " + describe(home.p_world) + " yaw " + std::to_string(home.yaw_rad) + " is not finite"};
+    return Error{"plan: home pose " + describe(home.p_world) + " yaw " + std::to_string(home.yaw_rad) +
+                 " is not finite"};
   if (!inBox(config, home.p_world)) return Error{outsideBox("plan: home position", config, home.p_world)};
   return std::unique_ptr<NbvPlanner>(new NbvPlanner(config, home));
 }
@@ -106,7 +107,7 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
   auto built = TraversabilityGrid::build(map, box, anyHeadingBox(config_.collision_box_m, config_.clearance_m),
-                                        {home_.p_world, config_.assume_free_radius_m});
+                                         {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
   for (const Eigen::Vector3d& c : contacts_) grid_->addContact(c);
@@ -172,7 +173,8 @@ PlanResult NbvPlanner::fromRoot(const Waypoint& root, const Waypoint& current, P
   return result;
 }
 
-Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current) {
+Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedMap>& snapshot,
+                                        const Waypoint& current) {
   if (Status s = prepare(snapshot, current, "plan home"); !s.ok()) return s.error();
   PlanResult result;
   result.map_version = snapshot->version();
@@ -185,7 +187,8 @@ Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedM
   if (!grid_->isSafe(from.p_world)) {
     const auto snapped = grid_->nearestSafe(from.p_world, config_.root_tolerance_m);
     if (!snapped) {
-      result.reason += "; the position " + describe(from.p_world) + " is not within plan.root_tolerance_m of a safe voxel";
+      result.reason +=
+          "; the position " + describe(from.p_world) + " is not within plan.root_tolerance_m of a safe voxel";
       return result;
     }
     start.p_world = *snapped;
@@ -231,7 +234,7 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
       // moment ago, so it moves straight (keeping its heading) to the nearest safe voxel that its box
       // reaches without touching an occupied voxel.
       if (const auto escape = grid_->nearestSafeClearOfOccupied(map, current.p_world, current.yaw_rad,
-                                                               config_.collision_box_m, config_.recovery_radius_m)) {
+                                                                config_.collision_box_m, config_.recovery_radius_m)) {
         return moveTo(*escape, "recovering: the current position " + describe(current.p_world) +
                                    " is not in the safe region; moving to " + describe(*escape));
       }
@@ -313,8 +316,10 @@ Result<PlanResult> NbvPlanner::plan(const std::shared_ptr<const map::MergedMap>&
     if (nearest_d > config_.max_edge_m) {
       end = near.w.p_world + (target - near.w.p_world) * (config_.max_edge_m / nearest_d);
       // Keep the constrained coordinates exact (no rounding drift off the plane or the vertical).
-      if (constrained && horizontal) end.z() = root.z();
-      else if (constrained) end.head<2>() = root.head<2>();
+      if (constrained && horizontal)
+        end.z() = root.z();
+      else if (constrained)
+        end.head<2>() = root.head<2>();
     }
     if (!grid_->edgeIsFree(near.w.p_world, end)) continue;
     const Waypoint w{end, geometry::wrapAngle(near.w.yaw_rad + dyaw)};

@@ -50,8 +50,7 @@ double SonarGain::weight(map::Occupancy status) const {
 }
 
 geometry::Pose3 SonarGain::sensorPose(const Waypoint& w) const {
-  return geometry::poseFromXyzRpy(w.p_world.x(), w.p_world.y(), w.p_world.z(), 0.0, 0.0, w.yaw_rad) *
-         T_vehicle_sensor_;
+  return geometry::poseFromXyzRpy(w.p_world.x(), w.p_world.y(), w.p_world.z(), 0.0, 0.0, w.yaw_rad) * T_vehicle_sensor_;
 }
 
 std::vector<Waypoint> SonarGain::interpolate(const Waypoint& from, const Waypoint& to) const {
@@ -86,8 +85,8 @@ bool SonarGain::castCached(const TraversabilityGrid& cache, const Eigen::Vector3
   const Eigen::Vector3i& gsize = cache.gridSize();
   const std::int64_t status_stride[3] = {1, gsize.x(), static_cast<std::int64_t>(gsize.x()) * gsize.y()};
   const std::int64_t seen_stride[3] = {1, box_size_.x(), static_cast<std::int64_t>(box_size_.x()) * box_size_.y()};
-  std::int64_t status_i = (key.x() - gmin.x()) + status_stride[1] * (key.y() - gmin.y()) +
-                          status_stride[2] * (key.z() - gmin.z());
+  std::int64_t status_i =
+      (key.x() - gmin.x()) + status_stride[1] * (key.y() - gmin.y()) + status_stride[2] * (key.z() - gmin.z());
   auto seen_i = static_cast<std::int64_t>(boxIndex(key));
   const std::uint8_t* status_of = cache.statusArray().data();
   std::uint64_t* seen = seen_.data();

@@ -69,14 +69,15 @@ struct Volume {
   std::vector<std::uint8_t> v;
 
   explicit Volume(const KeyBox& k) : keys(k), size(k.max - k.min + VoxelKey::Ones()) {
-    v.assign(static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z()),
-             0);
+    v.assign(
+        static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z()),
+        0);
   }
   std::size_t index(int x, int y, int z) const {
     return static_cast<std::size_t>(x - keys.min.x()) +
-           static_cast<std::size_t>(size.x()) * (static_cast<std::size_t>(y - keys.min.y()) +
-                                                  static_cast<std::size_t>(size.y()) *
-                                                      static_cast<std::size_t>(z - keys.min.z()));
+           static_cast<std::size_t>(size.x()) *
+               (static_cast<std::size_t>(y - keys.min.y()) +
+                static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(z - keys.min.z()));
   }
 };
 
@@ -119,11 +120,12 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
   const double n = static_cast<double>(g.size_.x()) * g.size_.y() * g.size_.z();
   if (n > static_cast<double>(kMaxGridVoxels)) {
     std::ostringstream s;
-    s << "traversability: the exploration box needs " << n << " voxels at " << g.resolution_
-      << " m (limit " << kMaxGridVoxels << ")";
+    s << "traversability: the exploration box needs " << n << " voxels at " << g.resolution_ << " m (limit "
+      << kMaxGridVoxels << ")";
     return Error{s.str()};
   }
-  if (!(assumed_free.radius_m >= 0.0) || !std::isfinite(assumed_free.radius_m) || !assumed_free.centre_world.allFinite())
+  if (!(assumed_free.radius_m >= 0.0) || !std::isfinite(assumed_free.radius_m) ||
+      !assumed_free.centre_world.allFinite())
     return Error{"traversability: the assumed-free sphere must have a finite centre and radius >= 0"};
   g.assumed_free_ = assumed_free;
   g.status_.assign(static_cast<std::size_t>(n), static_cast<std::uint8_t>(map::Occupancy::kUnknown));
@@ -245,9 +247,8 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
   const VoxelKey block_min = grid_.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
   const VoxelKey block_max = grid_.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
   const VoxelKey nb = block_max - block_min + VoxelKey::Ones();
-  std::vector<std::uint8_t> dirty(static_cast<std::size_t>(nb.x()) * static_cast<std::size_t>(nb.y()) *
-                                      static_cast<std::size_t>(nb.z()),
-                                  0);
+  std::vector<std::uint8_t> dirty(
+      static_cast<std::size_t>(nb.x()) * static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(nb.z()), 0);
   auto markAround = [&](const VoxelKey& origin) {
     KeyBox b;
     b.min = origin;
@@ -291,8 +292,9 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
     for (k.y() = 0; k.y() < nb.y(); ++k.y())
       for (k.x() = 0; k.x() < nb.x(); ++k.x()) {
         if (dirty[static_cast<std::size_t>(k.x()) +
-                  static_cast<std::size_t>(nb.x()) * (static_cast<std::size_t>(k.y()) +
-                                                       static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(k.z()))] == 0)
+                  static_cast<std::size_t>(nb.x()) *
+                      (static_cast<std::size_t>(k.y()) +
+                       static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(k.z()))] == 0)
           continue;
         const VoxelKey lo = (block_min + k) * MergedMap::kBlockSide;
         dirty_box.extend(lo, lo + VoxelKey::Constant(MergedMap::kBlockSide - 1));
@@ -306,12 +308,10 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
   return stats;
 }
 
-bool TraversabilityGrid::insideBox(const Eigen::Vector3d& p) const {
-  return p.allFinite() && box_world_.contains(p);
-}
+bool TraversabilityGrid::insideBox(const Eigen::Vector3d& p) const { return p.allFinite() && box_world_.contains(p); }
 
 std::vector<std::pair<double, VoxelKey>> TraversabilityGrid::safeKeysWithin(const Eigen::Vector3d& p_world,
-                                                                           double radius_m) const {
+                                                                            double radius_m) const {
   std::vector<std::pair<double, VoxelKey>> out;
   const int reach = static_cast<int>(std::ceil(radius_m * inv_resolution_));
   forEachKeyWithin(map::pointToKey(p_world, inv_resolution_), reach, [&](const VoxelKey& k) {
@@ -494,7 +494,8 @@ std::size_t TraversabilityGrid::safeCount() const {
 }
 
 bool TraversabilityGrid::sameFlags(const TraversabilityGrid& other) const {
-  return grid_.min == other.grid_.min && grid_.max == other.grid_.max && safe_ == other.safe_ && status_ == other.status_;
+  return grid_.min == other.grid_.min && grid_.max == other.grid_.max && safe_ == other.safe_ &&
+         status_ == other.status_;
 }
 
 }  // namespace vog::plan

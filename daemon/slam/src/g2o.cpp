@@ -96,8 +96,7 @@ double edgeChi2(const G2oGraph& g, const G2oEdgeSE2& e) {
 }
 
 double edgeChi2(const G2oGraph& g, const G2oEdgeSE3& e) {
-  const Vector6d err =
-      t2vMqt(e.T_from_to.inverse() * (g.vertices_se3.at(e.from).inverse() * g.vertices_se3.at(e.to)));
+  const Vector6d err = t2vMqt(e.T_from_to.inverse() * (g.vertices_se3.at(e.from).inverse() * g.vertices_se3.at(e.to)));
   return err.dot(e.information * err);
 }
 
@@ -147,8 +146,8 @@ Result<G2oGraph> parseG2o(std::string_view text) {
     };
     auto readId = [&](std::size_t k, std::int64_t& id) -> Status {
       if (!parseId(tok[k], id)) {
-        return Error{lineError(line_no, tag + " field " + std::to_string(k) + " '" + std::string(tok[k]) +
-                                            "' is not an integer id")};
+        return Error{lineError(
+            line_no, tag + " field " + std::to_string(k) + " '" + std::string(tok[k]) + "' is not an integer id")};
       }
       return Status::success();
     };
@@ -234,7 +233,7 @@ Result<G2oGraph> parseG2o(std::string_view text) {
     g.vertices_from_edges = true;
     for (std::size_t k = 0; k < g.numEdges(); ++k) {
       for (const std::int64_t id : g.is_3d ? std::array{g.edges_se3[k].from, g.edges_se3[k].to}
-                                            : std::array{g.edges_se2[k].from, g.edges_se2[k].to}) {
+                                           : std::array{g.edges_se2[k].from, g.edges_se2[k].to}) {
         if (g.is_3d) {
           g.vertices_se3.emplace(id, geometry::Pose3::Identity());
         } else {
@@ -250,7 +249,8 @@ Result<G2oGraph> parseG2o(std::string_view text) {
       const bool exists = g.is_3d ? g.vertices_se3.count(id) != 0 : g.vertices_se2.count(id) != 0;
       if (!exists) return Error{lineError(edge_lines[k], "edge references missing vertex " + std::to_string(id))};
     }
-    if (from == to) return Error{lineError(edge_lines[k], "edge connects vertex " + std::to_string(from) + " to itself")};
+    if (from == to)
+      return Error{lineError(edge_lines[k], "edge connects vertex " + std::to_string(from) + " to itself")};
   }
   for (const auto& [id, line] : fix_lines) {
     const bool exists = g.is_3d ? g.vertices_se3.count(id) != 0 : g.vertices_se2.count(id) != 0;

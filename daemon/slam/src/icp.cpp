@@ -26,7 +26,8 @@ Status checkCloud(const geometry::PointCloud& cloud, const char* which, std::siz
     }
   }
   if (need_normals) {
-    if (!cloud.hasNormals()) return Error{"icp: " + std::string(which) + " cloud has no normals (point-to-plane needs them)"};
+    if (!cloud.hasNormals())
+      return Error{"icp: " + std::string(which) + " cloud has no normals (point-to-plane needs them)"};
     for (std::size_t i = 0; i < cloud.normals.size(); ++i) {
       const double n = cloud.normals[i].norm();
       if (!std::isfinite(n) || std::abs(n - 1.0) > 1e-3) {
@@ -109,7 +110,8 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
   out.information.setZero();
   for (Eigen::Index r = 0; r < m; ++r) {
     for (Eigen::Index c = 0; c < m; ++c) {
-      out.information(comps[static_cast<std::size_t>(r)], comps[static_cast<std::size_t>(c)]) = AtA(r, c) / (sigma * sigma);
+      out.information(comps[static_cast<std::size_t>(r)], comps[static_cast<std::size_t>(c)]) =
+          AtA(r, c) / (sigma * sigma);
     }
   }
   std::vector<Eigen::Index> good;
@@ -134,22 +136,31 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
 
 Status PointToPoint2dConfig::validate() const {
   std::ostringstream os;
-  if (max_iterations < 1) os << "max_iterations must be >= 1, got " << max_iterations;
+  if (max_iterations < 1)
+    os << "max_iterations must be >= 1, got " << max_iterations;
   else if (!(max_correspondence_distance_m > 0.0) || !std::isfinite(max_correspondence_distance_m))
     os << "max_correspondence_distance_m must be finite and > 0, got " << max_correspondence_distance_m;
-  else if (!(translation_epsilon_m > 0.0)) os << "translation_epsilon_m must be > 0, got " << translation_epsilon_m;
-  else if (!(rotation_epsilon_rad > 0.0)) os << "rotation_epsilon_rad must be > 0, got " << rotation_epsilon_rad;
-  else if (!(mse_relative_epsilon >= 0.0)) os << "mse_relative_epsilon must be >= 0, got " << mse_relative_epsilon;
-  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m)) os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
-  else if (min_points < 3) os << "min_points must be >= 3, got " << min_points;
-  else if (min_correspondences < 3) os << "min_correspondences must be >= 3, got " << min_correspondences;
-  else return Status::success();
+  else if (!(translation_epsilon_m > 0.0))
+    os << "translation_epsilon_m must be > 0, got " << translation_epsilon_m;
+  else if (!(rotation_epsilon_rad > 0.0))
+    os << "rotation_epsilon_rad must be > 0, got " << rotation_epsilon_rad;
+  else if (!(mse_relative_epsilon >= 0.0))
+    os << "mse_relative_epsilon must be >= 0, got " << mse_relative_epsilon;
+  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m))
+    os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
+  else if (min_points < 3)
+    os << "min_points must be >= 3, got " << min_points;
+  else if (min_correspondences < 3)
+    os << "min_correspondences must be >= 3, got " << min_correspondences;
+  else
+    return Status::success();
   return Error{"point-to-point icp config: " + os.str()};
 }
 
 Status PointToPlaneConfig::validate() const {
   std::ostringstream os;
-  if (max_iterations < 1) os << "max_iterations must be >= 1, got " << max_iterations;
+  if (max_iterations < 1)
+    os << "max_iterations must be >= 1, got " << max_iterations;
   else if (!(max_correspondence_distance_m > 0.0) || !std::isfinite(max_correspondence_distance_m))
     os << "max_correspondence_distance_m must be finite and > 0, got " << max_correspondence_distance_m;
   else if (!(min_correspondence_distance_m > 0.0) || !(min_correspondence_distance_m <= max_correspondence_distance_m))
@@ -157,24 +168,31 @@ Status PointToPlaneConfig::validate() const {
        << max_correspondence_distance_m << "], got " << min_correspondence_distance_m;
   else if (!(correspondence_shrink > 0.0 && correspondence_shrink <= 1.0))
     os << "correspondence_shrink must be in (0, 1], got " << correspondence_shrink;
-  else if (!(convergence_epsilon > 0.0)) os << "convergence_epsilon must be > 0, got " << convergence_epsilon;
-  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m)) os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
+  else if (!(convergence_epsilon > 0.0))
+    os << "convergence_epsilon must be > 0, got " << convergence_epsilon;
+  else if (!(sigma_point_m > 0.0) || !std::isfinite(sigma_point_m))
+    os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
   else if (!(max_direction_stddev > 0.0) || !std::isfinite(max_direction_stddev))
     os << "max_direction_stddev must be finite and > 0, got " << max_direction_stddev;
-  else if (min_points < 6) os << "min_points must be >= 6, got " << min_points;
-  else if (min_correspondences < 6) os << "min_correspondences must be >= 6, got " << min_correspondences;
-  else return Status::success();
+  else if (min_points < 6)
+    os << "min_points must be >= 6, got " << min_points;
+  else if (min_correspondences < 6)
+    os << "min_correspondences must be >= 6, got " << min_correspondences;
+  else
+    return Status::success();
   return Error{"point-to-plane icp config: " + os.str()};
 }
 
 Status IcpAcceptanceConfig::validate() const {
   std::ostringstream os;
-  if (!(max_fitness_m2 > 0.0) || !std::isfinite(max_fitness_m2)) os << "max_fitness_m2 must be finite and > 0, got " << max_fitness_m2;
+  if (!(max_fitness_m2 > 0.0) || !std::isfinite(max_fitness_m2))
+    os << "max_fitness_m2 must be finite and > 0, got " << max_fitness_m2;
   else if (!(odometry_cov_x_m2_per_s >= 0.0) || !std::isfinite(odometry_cov_x_m2_per_s))
     os << "odometry_cov_x_m2_per_s must be finite and >= 0, got " << odometry_cov_x_m2_per_s;
   else if (!(odometry_cov_y_m2_per_s >= 0.0) || !std::isfinite(odometry_cov_y_m2_per_s))
     os << "odometry_cov_y_m2_per_s must be finite and >= 0, got " << odometry_cov_y_m2_per_s;
-  else return Status::success();
+  else
+    return Status::success();
   return Error{"icp acceptance config: " + os.str()};
 }
 
@@ -276,8 +294,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
 
   const NearestNeighbours nn(target.points);
   const std::vector<int> comps = estimatedComponents(config.dofs);
-  const double lambda_wc = (config.sigma_point_m / config.max_direction_stddev) *
-                           (config.sigma_point_m / config.max_direction_stddev);
+  const double lambda_wc =
+      (config.sigma_point_m / config.max_direction_stddev) * (config.sigma_point_m / config.max_direction_stddev);
   Vector6d x = toXyzRpy(T_target_source_init);
   IcpResult out;
   double max_distance_m = config.max_correspondence_distance_m;
@@ -289,8 +307,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, max_distance_m);
     if (lin.n < config.min_correspondences) {
       std::ostringstream os;
-      os << "icp: only " << lin.n << " correspondences within " << max_distance_m
-         << " m at iteration " << it << ", need " << config.min_correspondences;
+      os << "icp: only " << lin.n << " correspondences within " << max_distance_m << " m at iteration " << it
+         << ", need " << config.min_correspondences;
       return Error{os.str()};
     }
     // Thesis Alg. 7 steps 6-11: eigen-decompose A^T A; the Gauss-Newton step projected on the
@@ -325,8 +343,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   out.n_correspondences = lin.n_inliers;
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
-  fillConditioning(out, lin.AtA, comps, config.sigma_point_m,
-                   config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
+  fillConditioning(out, lin.AtA, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
   return out;
 }
 

@@ -38,8 +38,8 @@ Result<Eigen::MatrixXd> sqrtInformation(const Eigen::MatrixXd& information, std:
   const double lambda_min = eig.eigenvalues().minCoeff();
   if (!(lambda_max > 0.0) || !(lambda_min > 1e-12 * lambda_max)) {
     std::ostringstream os;
-    os << what << ": information matrix is not positive definite (eigenvalues in [" << lambda_min << ", "
-       << lambda_max << "])";
+    os << what << ": information matrix is not positive definite (eigenvalues in [" << lambda_min << ", " << lambda_max
+       << "])";
     return Error{os.str()};
   }
   const Eigen::LLT<Eigen::MatrixXd> llt(information);
@@ -55,12 +55,11 @@ Result<Eigen::MatrixXd> informationFromCovariance(const Eigen::MatrixXd& covaria
   const double lambda_min = eig.eigenvalues().minCoeff();
   if (!(lambda_max > 0.0) || !(lambda_min > 1e-12 * lambda_max)) {
     std::ostringstream os;
-    os << what << ": covariance is not positive definite (eigenvalues in [" << lambda_min << ", " << lambda_max
-       << "])";
+    os << what << ": covariance is not positive definite (eigenvalues in [" << lambda_min << ", " << lambda_max << "])";
     return Error{os.str()};
   }
-  Eigen::MatrixXd information = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                                eig.eigenvectors().transpose();
+  Eigen::MatrixXd information =
+      eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   information = 0.5 * (information + information.transpose());
   return information;
 }

@@ -19,8 +19,8 @@ bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b) {
   return (c_a.array() >= a.aabb_min_submap.array()).all() && (c_a.array() <= a.aabb_max_submap.array()).all();
 }
 
-Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(
-    const std::vector<SubmapFootprint>& submaps, const CandidateConfig& config) {
+Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(const std::vector<SubmapFootprint>& submaps,
+                                                                            const CandidateConfig& config) {
   if (Status s = config.validate(); !s) return s.error();
   for (const SubmapFootprint& s : submaps) {
     const std::string name = "loop candidates: submap " + std::to_string(s.index);

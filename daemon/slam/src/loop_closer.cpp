@@ -38,9 +38,7 @@ SubmapFootprint footprintOf(const LoopSubmap& s) {
 
 }  // namespace
 
-const char* toString(LoopClosureMode mode) {
-  return mode == LoopClosureMode::kPointToPoint2d ? "p2p" : "degenerate";
-}
+const char* toString(LoopClosureMode mode) { return mode == LoopClosureMode::kPointToPoint2d ? "p2p" : "degenerate"; }
 
 Result<LoopClosureMode> parseLoopClosureMode(std::string_view name) {
   if (name == "p2p") return LoopClosureMode::kPointToPoint2d;
@@ -56,7 +54,8 @@ Status LoopCloserConfig::validate() const {
   }
   if (Status s = acceptance.validate(); !s.ok()) return Error{"loop closer config: acceptance: " + s.error().message};
   if (!(p2p_max_fitness_m2 > 0.0) || !std::isfinite(p2p_max_fitness_m2)) {
-    return Error{"loop closer config: p2p_max_fitness_m2 = " + std::to_string(p2p_max_fitness_m2) + " must be positive"};
+    return Error{"loop closer config: p2p_max_fitness_m2 = " + std::to_string(p2p_max_fitness_m2) +
+                 " must be positive"};
   }
   if (!(max_heading_difference_rad > 0.0 && max_heading_difference_rad <= std::numbers::pi)) {
     return Error{"loop closer config: max_heading_difference_rad = " + std::to_string(max_heading_difference_rad) +
@@ -146,15 +145,15 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
       ++out.stats.rejected_by_reason[reasonKey(icp.value(), acc)];
       continue;
     }
-    const double yaw_disagreement = std::abs(geometry::wrapAngle(geometry::yawOf(icp->T_target_source.linear()) -
-                                                                 geometry::yawOf(T_prior.linear())));
+    const double yaw_disagreement = std::abs(
+        geometry::wrapAngle(geometry::yawOf(icp->T_target_source.linear()) - geometry::yawOf(T_prior.linear())));
     if (yaw_disagreement > config_.max_yaw_disagreement_rad) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["yaw_disagreement"];
       continue;
     }
-    const double overlap =
-        static_cast<double>(icp->n_correspondences) / static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));
+    const double overlap = static_cast<double>(icp->n_correspondences) /
+                           static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));
     if (overlap < min_overlap) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["overlap"];

@@ -36,13 +36,12 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPi
   if (!graph) return graph.error();
   auto map = map::VogMap::create(config.builder.grid);
   if (!map) return map.error();
-  return std::unique_ptr<MappingPipeline>(new MappingPipeline(config, std::move(builder.value()),
-                                                              std::move(closer.value()), std::move(graph.value()),
-                                                              std::move(map.value())));
+  return std::unique_ptr<MappingPipeline>(new MappingPipeline(
+      config, std::move(builder.value()), std::move(closer.value()), std::move(graph.value()), std::move(map.value())));
 }
 
 Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingPipelineConfig& config,
-                                                                 const PipelineState& state) {
+                                                                  const PipelineState& state) {
   if (Status s = config.validate(); !s.ok()) return s.error();
   if (state.estimates.size() != state.submaps.size()) {
     return Error{"restore: " + std::to_string(state.submaps.size()) + " submaps but " +
@@ -93,12 +92,14 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingP
   for (std::size_t k = 0; k < state.submaps.size(); ++k) {
     const ClosedSubmap& c = state.submaps[k];
     const NodeId id = c.index;
-    if (Status s = p.graph_.addNode(id, fromXyzRpy(state.estimates[k])); !s.ok()) return Error{"restore: " + s.error().message};
+    if (Status s = p.graph_.addNode(id, fromXyzRpy(state.estimates[k])); !s.ok())
+      return Error{"restore: " + s.error().message};
     if (Status s = p.graph_.setEstimate(id, state.estimates[k]); !s.ok()) return Error{"restore: " + s.error().message};
     if (c.has_previous) {
       auto information = informationFromCovariance(c.odometry_covariance, "odometry covariance");
       if (!information) return Error{"restore: submap " + std::to_string(id) + ": " + information.error().message};
-      if (Status s = p.graph_.addOdometryFactor(id - 1, id, c.odometry_from_previous, Eigen::Matrix3d(information.value()));
+      if (Status s =
+              p.graph_.addOdometryFactor(id - 1, id, c.odometry_from_previous, Eigen::Matrix3d(information.value()));
           !s.ok()) {
         return Error{"restore: " + s.error().message};
       }

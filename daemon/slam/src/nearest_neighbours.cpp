@@ -15,9 +15,8 @@ struct NearestNeighbours::Impl {
       return false;
     }
   };
-  using KdTree =
-      nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor, 3,
-                                          std::size_t>;
+  using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>, CloudAdaptor,
+                                                     3, std::size_t>;
 
   explicit Impl(const std::vector<Eigen::Vector3d>& points)
       : adaptor{points}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {}

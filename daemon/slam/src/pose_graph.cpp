@@ -332,8 +332,8 @@ Status PoseGraph::addLoopClosure(NodeId from, NodeId to, const geometry::Pose3& 
   if (!geometry::isValidPose(T_from_to)) return Error{"pose graph: loop closure has a non-finite or non-rigid pose"};
   auto U = sqrtInformation(information, "pose graph: loop closure information");
   if (!U) return U.error();
-  relative_.push_back(RelativeFactor{RelativeKind::kLoopClosure, from, to, toXyzRpy(T_from_to),
-                                     Eigen::MatrixXd::Identity(6, 6), *U});
+  relative_.push_back(
+      RelativeFactor{RelativeKind::kLoopClosure, from, to, toXyzRpy(T_from_to), Eigen::MatrixXd::Identity(6, 6), *U});
   return Status::success();
 }
 
@@ -353,8 +353,7 @@ Status PoseGraph::addPartialLoopClosure(NodeId from, NodeId to, const PartialLoo
   if (!info) return info.error();
   auto U = sqrtInformation(*info, "pose graph: partial loop closure information");
   if (!U) return U.error();
-  relative_.push_back(
-      RelativeFactor{RelativeKind::kPartialLoopClosure, from, to, closure.x_icp, closure.V_u, *U});
+  relative_.push_back(RelativeFactor{RelativeKind::kPartialLoopClosure, from, to, closure.x_icp, closure.V_u, *U});
   return Status::success();
 }
 
@@ -370,8 +369,7 @@ Status PoseGraph::addSe2Factor(NodeId from, NodeId to, const Eigen::Vector3d& xy
   return Status::success();
 }
 
-Status PoseGraph::addSe3Factor(NodeId from, NodeId to, const geometry::Pose3& T_from_to,
-                               const Matrix6d& information) {
+Status PoseGraph::addSe3Factor(NodeId from, NodeId to, const geometry::Pose3& T_from_to, const Matrix6d& information) {
   if (Status s = checkNodes(from, to, "SE3 factor"); !s) return s;
   if (!geometry::isValidPose(T_from_to)) return Error{"pose graph: SE3 factor has a non-finite or non-rigid pose"};
   auto U = sqrtInformation(information, "pose graph: SE3 factor information");
@@ -425,9 +423,8 @@ Result<std::vector<std::pair<NodeId, std::ptrdiff_t>>> PoseGraph::spanningTree()
     for (const auto& [id, x] : nodes_) {
       if (reached.count(id) != 0) continue;
       std::ostringstream os;
-      os << "pose graph: the graph is disconnected: node " << id << " is not connected to node "
-         << roots().front() << " by any chain of relative factors (" << reached.size() << " of " << nodes_.size()
-         << " nodes reached)";
+      os << "pose graph: the graph is disconnected: node " << id << " is not connected to node " << roots().front()
+         << " by any chain of relative factors (" << reached.size() << " of " << nodes_.size() << " nodes reached)";
       return Error{os.str()};
     }
   }
@@ -501,7 +498,8 @@ Status PoseGraph::initializeChordal() {
       const Matrix6d cov6 = info.inverse();
       const std::array<int, 3> idx{kX, kY, kYaw};
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) cov(r, c) = cov6(idx[static_cast<std::size_t>(r)], idx[static_cast<std::size_t>(c)]);
+        for (int c = 0; c < 3; ++c)
+          cov(r, c) = cov6(idx[static_cast<std::size_t>(r)], idx[static_cast<std::size_t>(c)]);
       }
     } else {
       cov = Eigen::Matrix3d(info).inverse();
@@ -514,8 +512,7 @@ Status PoseGraph::initializeChordal() {
       return Error{os.str()};
     }
     planar.push_back(Planar{f.from, f.to, Eigen::Vector2d(f.measurement(kX), f.measurement(kY)), f.measurement(kYaw),
-                            1.0 / cov(2, 2), llt.matrixU(),
-                            f.kind == RelativeKind::kSe2 ? f.measurement(kYaw) : 0.0});
+                            1.0 / cov(2, 2), llt.matrixU(), f.kind == RelativeKind::kSe2 ? f.measurement(kYaw) : 0.0});
   }
   auto tree = spanningTree();
   if (!tree) return Error{"chordal initialisation: " + tree.error().message};
@@ -544,7 +541,8 @@ Status PoseGraph::initializeChordal() {
       const auto row0 = static_cast<int>(2 * k);
       Eigen::Vector2d rhs = rows[k].rhs;
       const std::array<std::pair<NodeId, Eigen::Matrix2d>, 2> blocks{
-          std::pair{planar[k].to, Eigen::Matrix2d(rows[k].to)}, std::pair{planar[k].from, Eigen::Matrix2d(-rows[k].from)}};
+          std::pair{planar[k].to, Eigen::Matrix2d(rows[k].to)},
+          std::pair{planar[k].from, Eigen::Matrix2d(-rows[k].from)}};
       for (const auto& [id, M] : blocks) {
         const auto it = index.find(id);
         if (it == index.end()) {
@@ -625,7 +623,8 @@ Result<OptimizeResult> PoseGraph::optimize() {
                            Eigen::Matrix3d(f.sqrt_information));
         break;
       case RelativeKind::kSe3:
-        cost = new ceres::AutoDiffCostFunction<Se3Cost, 6, 6, 6>(new Se3Cost(f.T_from_to, Matrix6d(f.sqrt_information)));
+        cost =
+            new ceres::AutoDiffCostFunction<Se3Cost, 6, 6, 6>(new Se3Cost(f.T_from_to, Matrix6d(f.sqrt_information)));
         break;
       case RelativeKind::kOdometry:
       case RelativeKind::kLoopClosure:
@@ -650,9 +649,9 @@ Result<OptimizeResult> PoseGraph::optimize() {
     problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
   }
   for (const AbsoluteFactor& f : absolute_) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(
-                                 new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
-                             nullptr, work.at(f.id).data());
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
+        nullptr, work.at(f.id).data());
     mark(f.id, kAbsoluteMask);
   }
   if (problem.NumResidualBlocks() == 0) return Error{"pose graph: nothing to optimize (no factors)"};

@@ -35,7 +35,8 @@ std::vector<geometry::Pose3> RevisitPolicy::due(const std::vector<SubmapRecord>&
   for (; closures_seen_ < closures.size(); ++closures_seen_) {
     const ClosurePair& c = closures[closures_seen_];
     if (!known(c.from) || !known(c.to)) continue;
-    if (startOf(c.to) - startOf(c.from) >= config_.anchor_span_s) last_anchor_s_ = std::max(last_anchor_s_, startOf(c.to));
+    if (startOf(c.to) - startOf(c.from) >= config_.anchor_span_s)
+      last_anchor_s_ = std::max(last_anchor_s_, startOf(c.to));
   }
   const double now_s = secondsOf(now_ns);
   if (config_.after_s <= 0.0 || !(now_s - std::max(last_anchor_s_, last_revisit_s_) > config_.after_s)) return {};

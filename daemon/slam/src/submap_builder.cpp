@@ -34,12 +34,15 @@ const char* toString(CloseReason reason) {
 Status SubmapBuilderConfig::validate() const {
   if (Status s = grid.validate(); !s.ok()) return Error{"submap builder config: grid: " + s.error().message};
   if (Status s = fan.validate(); !s.ok()) return Error{"submap builder config: fan: " + s.error().message};
-  if (!positiveFinite(odometry_cov_x_m2_per_s)) return badKey("odometry_cov_x_m2_per_s", odometry_cov_x_m2_per_s, "must be > 0");
-  if (!positiveFinite(odometry_cov_y_m2_per_s)) return badKey("odometry_cov_y_m2_per_s", odometry_cov_y_m2_per_s, "must be > 0");
+  if (!positiveFinite(odometry_cov_x_m2_per_s))
+    return badKey("odometry_cov_x_m2_per_s", odometry_cov_x_m2_per_s, "must be > 0");
+  if (!positiveFinite(odometry_cov_y_m2_per_s))
+    return badKey("odometry_cov_y_m2_per_s", odometry_cov_y_m2_per_s, "must be > 0");
   if (!positiveFinite(odometry_cov_yaw_rad2_per_s)) {
     return badKey("odometry_cov_yaw_rad2_per_s", odometry_cov_yaw_rad2_per_s, "must be > 0");
   }
-  if (!positiveFinite(max_position_stddev_m)) return badKey("max_position_stddev_m", max_position_stddev_m, "must be > 0");
+  if (!positiveFinite(max_position_stddev_m))
+    return badKey("max_position_stddev_m", max_position_stddev_m, "must be > 0");
   if (!positiveFinite(max_yaw_stddev_rad)) return badKey("max_yaw_stddev_rad", max_yaw_stddev_rad, "must be > 0");
   if (max_scans < 1) return badKey("max_scans", max_scans, "must be >= 1");
   if (!positiveFinite(max_heading_change_rad) || max_heading_change_rad > std::numbers::pi) {
@@ -109,8 +112,8 @@ Result<SubmapBuilder> SubmapBuilder::resumeAfter(const SubmapBuilderConfig& conf
                  ": its base pose is non-finite or non-rigid"};
   }
   if (last_closed.last_stamp_ns < last_closed.first_stamp_ns) {
-    return Error{"submap builder: cannot resume after submap " + std::to_string(last_closed.index) +
-                 ": last stamp " + std::to_string(last_closed.last_stamp_ns) + " is before first stamp " +
+    return Error{"submap builder: cannot resume after submap " + std::to_string(last_closed.index) + ": last stamp " +
+                 std::to_string(last_closed.last_stamp_ns) + " is before first stamp " +
                  std::to_string(last_closed.first_stamp_ns)};
   }
   SubmapBuilder& b = builder.value();
@@ -163,7 +166,8 @@ Result<std::optional<ClosedSubmap>> SubmapBuilder::addScan(const ScanInput& inpu
   }
   map::LocalGrid& target = starts_new ? *fresh : *active_;
   const geometry::Pose3 T_world_base = starts_new ? input.T_world_vehicle_odom : T_world_base_;
-  const geometry::Pose3 T_grid_sensor = T_world_base.inverse() * input.T_world_vehicle_odom * config_.fan.T_vehicle_sensor;
+  const geometry::Pose3 T_grid_sensor =
+      T_world_base.inverse() * input.T_world_vehicle_odom * config_.fan.T_vehicle_sensor;
   if (Status s = target.insertScan(T_grid_sensor, config_.fan, input.scan); !s.ok()) {
     return Error{"submap builder: " + s.error().message};
   }

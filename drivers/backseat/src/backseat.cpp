@@ -25,8 +25,8 @@ std::optional<TimeOfDay> parseTime(std::string_view s) {
   const auto hh = codec::parseInt(s.substr(0, 2));
   const auto mm = codec::parseInt(s.substr(2, 2));
   const auto ss = codec::parseDouble(s.substr(4));
-  if (!hh || !mm || !ss || *hh < 0 || *hh > 23 || *mm < 0 || *mm > 59 || *ss < 0.0 || *ss >= 61.0 ||
-      s[0] == '+' || s[2] == '+' || s[4] == '+' || s[4] == '-') {
+  if (!hh || !mm || !ss || *hh < 0 || *hh > 23 || *mm < 0 || *mm > 59 || *ss < 0.0 || *ss >= 61.0 || s[0] == '+' ||
+      s[2] == '+' || s[4] == '+' || s[4] == '-') {
     return std::nullopt;
   }
   return TimeOfDay{static_cast<double>(*hh * 3600 + *mm * 60) + *ss};
@@ -66,7 +66,9 @@ struct Parser {
   }
   std::optional<double> angle(std::size_t i, std::size_t digits, double limit) {
     auto a = parseAngle(f[i], f[i + 1], digits, limit);
-    if (!a) why = "field " + std::to_string(i) + " " + codec::quoted(f[i]) + "," + std::string(f[i + 1]) + " is not a position";
+    if (!a)
+      why =
+          "field " + std::to_string(i) + " " + codec::quoted(f[i]) + "," + std::string(f[i + 1]) + " is not a position";
     return a;
   }
   std::optional<BackseatSentence> fail(std::string message) {
@@ -163,7 +165,8 @@ struct Parser {
       if (f.size() == 10 && !f[9].empty()) {
         auto heading = num(9);
         if (!heading) return std::nullopt;
-        if (!(*heading >= 0.0 && *heading < 360.0)) return fail("heading " + codec::quoted(f[9]) + " is outside [0, 360)");
+        if (!(*heading >= 0.0 && *heading < 360.0))
+          return fail("heading " + codec::quoted(f[9]) + " is outside [0, 360)");
         w.heading_deg = *heading;
       }
       return w;
@@ -253,9 +256,9 @@ struct Encoder {
            sanitize(a.reason);
   }
   std::string operator()(const WaypointCommand& w) const {
-    return "BPGHP," + formatTime(w.time) + "," + std::to_string(w.id) + "," +
-           formatAngle(w.latitude_deg, 2, 'N', 'S') + "," + formatAngle(w.longitude_deg, 3, 'E', 'W') + "," +
-           num(w.depth_m, 2) + "," + num(w.speed_mps, 2) + (w.heading_deg ? "," + num(*w.heading_deg, 2) : "");
+    return "BPGHP," + formatTime(w.time) + "," + std::to_string(w.id) + "," + formatAngle(w.latitude_deg, 2, 'N', 'S') +
+           "," + formatAngle(w.longitude_deg, 3, 'E', 'W') + "," + num(w.depth_m, 2) + "," + num(w.speed_mps, 2) +
+           (w.heading_deg ? "," + num(*w.heading_deg, 2) : "");
   }
   std::string operator()(const Heartbeat& h) const {
     return "BPSTS," + formatTime(h.time) + "," + std::to_string(std::clamp(h.state, 0, 255)) + "," + sanitize(h.text);
@@ -292,14 +295,16 @@ std::string encodeBackseat(const BackseatSentence& sentence) {
 
 codec::DecodeResult<BackseatSentence> BackseatCodec::decode(std::span<const std::uint8_t> b) const {
   if (b.empty()) return ResultBs::needMore();
-  if (b[0] != '$') return ResultBs::bad(BadKind::kNoSync, codec::findByte(b, '$', 1), "backseat: no '$' sentence start");
+  if (b[0] != '$')
+    return ResultBs::bad(BadKind::kNoSync, codec::findByte(b, '$', 1), "backseat: no '$' sentence start");
   const std::size_t lf = codec::findByte(b, '\n');
   if (lf == b.size()) {
     const std::size_t next = codec::findByte(b, '$', 1);
     if (next < b.size()) {
       return ResultBs::bad(BadKind::kMalformed, next, "backseat: sentence cut short by a new '$'");
     }
-    if (b.size() > config_.max_sentence_bytes) return ResultBs::bad(BadKind::kMalformed, 1, "backseat: sentence longer than limit");
+    if (b.size() > config_.max_sentence_bytes)
+      return ResultBs::bad(BadKind::kMalformed, 1, "backseat: sentence longer than limit");
     return ResultBs::needMore();
   }
   const std::size_t consumed = lf + 1;
@@ -307,7 +312,8 @@ codec::DecodeResult<BackseatSentence> BackseatCodec::decode(std::span<const std:
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   const std::size_t second = line.find('$', 1);
   if (second != std::string_view::npos) {
-    return ResultBs::bad(BadKind::kMalformed, second, "backseat: truncated sentence " + codec::quoted(line.substr(0, second)));
+    return ResultBs::bad(BadKind::kMalformed, second,
+                         "backseat: truncated sentence " + codec::quoted(line.substr(0, second)));
   }
   const std::size_t star = line.rfind('*');
   if (star == std::string_view::npos || star + 3 != line.size()) {
@@ -315,7 +321,8 @@ codec::DecodeResult<BackseatSentence> BackseatCodec::decode(std::span<const std:
   }
   const int hi = hexValue(line[star + 1]);
   const int lo = hexValue(line[star + 2]);
-  if (hi < 0 || lo < 0) return ResultBs::bad(BadKind::kMalformed, consumed, "backseat: checksum not hex in " + codec::quoted(line));
+  if (hi < 0 || lo < 0)
+    return ResultBs::bad(BadKind::kMalformed, consumed, "backseat: checksum not hex in " + codec::quoted(line));
   const std::string_view body = line.substr(1, star - 1);
   const std::uint8_t expected = static_cast<std::uint8_t>(hi * 16 + lo);
   if (xorChecksum(body) != expected) {
@@ -329,15 +336,16 @@ codec::DecodeResult<BackseatSentence> BackseatCodec::decode(std::span<const std:
 }
 
 Status AckTrackerConfig::validate() const {
-  if (resend_after_ns <= 0) return Error{"backseat.resend_after_ns: " + std::to_string(resend_after_ns) + " must be > 0"};
+  if (resend_after_ns <= 0)
+    return Error{"backseat.resend_after_ns: " + std::to_string(resend_after_ns) + " must be > 0"};
   if (max_attempts < 1) return Error{"backseat.max_attempts: " + std::to_string(max_attempts) + " must be >= 1"};
   return {};
 }
 
 Result<std::string> AckTracker::send(const WaypointCommand& command, std::int64_t now_ns) {
   if (auto st = config_.validate(); !st.ok()) return st.error();
-  const bool busy = std::any_of(pending_.begin(), pending_.end(),
-                                [&](const Pending& p) { return p.command.id == command.id; });
+  const bool busy =
+      std::any_of(pending_.begin(), pending_.end(), [&](const Pending& p) { return p.command.id == command.id; });
   if (busy) return Error{"waypoint command " + std::to_string(command.id) + " is already awaiting acknowledgement"};
   Pending p;
   p.command = command;
@@ -353,7 +361,8 @@ Result<AckTracker::Outcome> AckTracker::onAck(const AckSentence& ack) {
     return ack.command == "BPGHP" && p.command.id == ack.command_id;
   });
   if (it == pending_.end()) {
-    return Error{"acknowledgement of " + ack.command + " " + std::to_string(ack.command_id) + " matches no pending command"};
+    return Error{"acknowledgement of " + ack.command + " " + std::to_string(ack.command_id) +
+                 " matches no pending command"};
   }
   Outcome o;
   o.command_id = it->command.id;
@@ -372,8 +381,8 @@ std::vector<std::string> AckTracker::poll(std::int64_t now_ns) {
       continue;
     }
     if (it->attempts >= config_.max_attempts) {
-      outcomes_.push_back(Outcome{it->command.id, false,
-                                  "no acknowledgement after " + std::to_string(it->attempts) + " attempts"});
+      outcomes_.push_back(
+          Outcome{it->command.id, false, "no acknowledgement after " + std::to_string(it->attempts) + " attempts"});
       it = pending_.erase(it);
       continue;
     }

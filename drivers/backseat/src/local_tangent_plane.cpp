@@ -17,7 +17,7 @@ Result<LocalTangentPlane> LocalTangentPlane::create(GeoPoint origin) {
   const double phi = origin.latitude_deg * std::numbers::pi / 180.0;
   const double w = 1.0 - e2 * std::sin(phi) * std::sin(phi);
   const double m_radius = a * (1.0 - e2) / (w * std::sqrt(w));  // meridional
-  const double n_radius = a / std::sqrt(w);                      // prime vertical
+  const double n_radius = a / std::sqrt(w);                     // prime vertical
   const double rad = std::numbers::pi / 180.0;
   return LocalTangentPlane(origin, m_radius * rad, n_radius * std::cos(phi) * rad);
 }

@@ -71,10 +71,12 @@ Status DepthConversionConfig::validate() const {
 
 codec::DecodeResult<DigiquartzMessage> DigiquartzCodec::decode(std::span<const std::uint8_t> b) const {
   if (b.empty()) return ResultDq::needMore();
-  if (b[0] != '*') return ResultDq::bad(BadKind::kNoSync, codec::findByte(b, '*', 1), "Digiquartz: no '*' message start");
+  if (b[0] != '*')
+    return ResultDq::bad(BadKind::kNoSync, codec::findByte(b, '*', 1), "Digiquartz: no '*' message start");
   const std::size_t lf = codec::findByte(b, '\n');
   if (lf == b.size()) {
-    if (b.size() > config_.max_line_bytes) return ResultDq::bad(BadKind::kMalformed, 1, "Digiquartz: line longer than limit");
+    if (b.size() > config_.max_line_bytes)
+      return ResultDq::bad(BadKind::kMalformed, 1, "Digiquartz: line longer than limit");
     return ResultDq::needMore();
   }
   const std::size_t consumed = lf + 1;
@@ -99,7 +101,8 @@ codec::DecodeResult<DigiquartzMessage> DigiquartzCodec::decode(std::span<const s
   }
   if (body.find('*') != std::string_view::npos) {
     // Two messages run together: the first was truncated. Restart at the second '*'.
-    return ResultDq::bad(BadKind::kMalformed, line.find('*', 1), "Digiquartz: truncated message " + codec::quoted(line));
+    return ResultDq::bad(BadKind::kMalformed, line.find('*', 1),
+                         "Digiquartz: truncated message " + codec::quoted(line));
   }
   msg.body = std::string(body);
   const std::size_t eq = body.find('=');

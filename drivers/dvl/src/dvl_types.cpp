@@ -37,7 +37,8 @@ Result<std::int64_t> clockToUnixNs(const DvlClock& clock) {
 }
 
 Result<BottomVelocity> bottomVelocity(const DvlEnsemble& ensemble) {
-  if (!ensemble.bottom_track) return Error{"ensemble " + std::to_string(ensemble.variable.ensemble_number) + " has no bottom track"};
+  if (!ensemble.bottom_track)
+    return Error{"ensemble " + std::to_string(ensemble.variable.ensemble_number) + " has no bottom track"};
   const DvlBottomTrack& bt = *ensemble.bottom_track;
   BottomVelocity out;
   out.stamp_ns = ensemble.stamp_ns;
@@ -50,7 +51,8 @@ Result<BottomVelocity> bottomVelocity(const DvlEnsemble& ensemble) {
       }
     }
     if (ensemble.fixed.beam_angle_deg <= 0 || ensemble.fixed.beam_angle_deg >= 90) {
-      return Error{"beam angle " + std::to_string(ensemble.fixed.beam_angle_deg) + " deg unknown, cannot transform beams"};
+      return Error{"beam angle " + std::to_string(ensemble.fixed.beam_angle_deg) +
+                   " deg unknown, cannot transform beams"};
     }
     // RDI "ADCP Coordinate Transformation" (P/N 951-6079), 4-beam Janus, convex transducer (c = +1).
     const double theta = ensemble.fixed.beam_angle_deg * std::numbers::pi / 180.0;

@@ -115,15 +115,17 @@ codec::DecodeResult<DvlEnsemble> Pd0Codec::decode(std::span<const std::uint8_t> 
   const int n_types = b[5];
   const std::size_t header_bytes = 6 + 2 * static_cast<std::size_t>(n_types);
   if (n_types < 1 || n_types > config_.max_data_types) {
-    return Result0::bad(BadKind::kMalformed, 2, "PD0: number of data types " + std::to_string(n_types) + " out of range");
+    return Result0::bad(BadKind::kMalformed, 2,
+                        "PD0: number of data types " + std::to_string(n_types) + " out of range");
   }
   if (size > config_.max_ensemble_bytes) {
-    return Result0::bad(BadKind::kMalformed, 2,
-                        "PD0: ensemble size " + std::to_string(size) + " exceeds limit " +
-                            std::to_string(config_.max_ensemble_bytes));
+    return Result0::bad(
+        BadKind::kMalformed, 2,
+        "PD0: ensemble size " + std::to_string(size) + " exceeds limit " + std::to_string(config_.max_ensemble_bytes));
   }
   if (size < header_bytes + 2) {
-    return Result0::bad(BadKind::kMalformed, 2, "PD0: ensemble size " + std::to_string(size) + " smaller than its header");
+    return Result0::bad(BadKind::kMalformed, 2,
+                        "PD0: ensemble size " + std::to_string(size) + " smaller than its header");
   }
   if (b.size() < header_bytes) return Result0::needMore();
   std::vector<std::size_t> offsets(static_cast<std::size_t>(n_types));
@@ -256,17 +258,17 @@ std::vector<std::uint8_t> encodePd0(const DvlEnsemble& e) {
   w.u8(f.firmware_version);
   w.u8(f.firmware_revision);
   w.u16(f.system_configuration);
-  w.u8(0);   // real/simulated flag
-  w.u8(0);   // lag length
+  w.u8(0);  // real/simulated flag
+  w.u8(0);  // lag length
   w.u8(static_cast<std::uint8_t>(beams));
   w.u8(saturate<std::uint8_t>(cells > 0 ? static_cast<double>(cells) : f.n_cells));
   w.u16(saturate<std::uint16_t>(f.pings_per_ensemble));
   w.u16(saturate<std::uint16_t>(f.cell_length_m * 100.0));
   w.u16(saturate<std::uint16_t>(f.blank_m * 100.0));
   w.zeros(25 - (out.size() - fixed_start));
-  const std::uint8_t ex = static_cast<std::uint8_t>((static_cast<unsigned>(f.coordinate_frame) << 3) |
-                                                    (f.tilts_used ? 0x04U : 0U) | (f.three_beam_allowed ? 0x02U : 0U) |
-                                                    (f.bin_mapping ? 0x01U : 0U));
+  const std::uint8_t ex =
+      static_cast<std::uint8_t>((static_cast<unsigned>(f.coordinate_frame) << 3) | (f.tilts_used ? 0x04U : 0U) |
+                                (f.three_beam_allowed ? 0x02U : 0U) | (f.bin_mapping ? 0x01U : 0U));
   w.u8(ex);
   w.i16(saturate<std::int16_t>(f.heading_alignment_deg * 100.0));
   w.i16(saturate<std::int16_t>(f.heading_bias_deg * 100.0));

@@ -48,18 +48,19 @@ std::optional<Pd6Sentence> parseLine(std::string_view line, std::string& why) {
     ts.bit_result = static_cast<int>(*bit);
     return ts;
   }
-  if (name.size() == 3 && (name[1] == 'B' || name[1] == 'W') &&
-      (name[2] == 'I' || name[2] == 'S' || name[2] == 'E')) {
+  if (name.size() == 3 && (name[1] == 'B' || name[1] == 'W') && (name[2] == 'I' || name[2] == 'S' || name[2] == 'E')) {
     Pd6Velocity vel;
     vel.bottom = name[1] == 'B';
     vel.frame = name[2] == 'I' ? CoordinateFrame::kInstrument
                                : (name[2] == 'S' ? CoordinateFrame::kShip : CoordinateFrame::kEarth);
     vel.has_error_velocity = name[2] == 'I';
     const std::size_t n_values = vel.has_error_velocity ? 4 : 3;
-    if (fields.size() != n_values + 2) return fail(std::string(name.substr(1)) + " needs " + std::to_string(n_values + 1) + " fields");
+    if (fields.size() != n_values + 2)
+      return fail(std::string(name.substr(1)) + " needs " + std::to_string(n_values + 1) + " fields");
     for (std::size_t i = 0; i < n_values; ++i) {
       const auto v = codec::parseInt(fields[1 + i]);
-      if (!v || *v < kBadValue || *v > 32767) return fail(std::string(name.substr(1)) + " velocity not an integer in mm/s");
+      if (!v || *v < kBadValue || *v > 32767)
+        return fail(std::string(name.substr(1)) + " velocity not an integer in mm/s");
       const bool ok = *v != kBadValue;
       if (i < 3) {
         vel.component_valid[i] = ok;
@@ -106,7 +107,8 @@ codec::DecodeResult<Pd6Sentence> Pd6Codec::decode(std::span<const std::uint8_t> 
   // A ':' inside the line means we joined mid-line or two lines were merged: restart at it.
   const std::size_t second = line.find(':', 1);
   if (second != std::string_view::npos) {
-    return Result6::bad(BadKind::kMalformed, second, "PD6: truncated sentence " + codec::quoted(line.substr(0, second)));
+    return Result6::bad(BadKind::kMalformed, second,
+                        "PD6: truncated sentence " + codec::quoted(line.substr(0, second)));
   }
   std::string why;
   auto sentence = parseLine(line, why);
@@ -131,8 +133,8 @@ struct Encoder {
     char buf[128];
     std::snprintf(buf, sizeof buf, ":TS,%02d%02d%02d%02d%02d%02d%02d,%04.1f,%+05.1f,%06.1f,%06.1f,%03d\r\n",
                   ((t.clock.year % 100) + 100) % 100, t.clock.month % 100, t.clock.day % 100, t.clock.hour % 100,
-                  t.clock.minute % 100, t.clock.second % 100, t.clock.hundredths % 100, t.salinity_ppt,
-                  t.temperature_c, t.transducer_depth_m, t.sound_speed_mps, t.bit_result % 1000);
+                  t.clock.minute % 100, t.clock.second % 100, t.clock.hundredths % 100, t.salinity_ppt, t.temperature_c,
+                  t.transducer_depth_m, t.sound_speed_mps, t.bit_result % 1000);
     return buf;
   }
   std::string operator()(const Pd6Velocity& v) const {
@@ -167,7 +169,8 @@ Result<BottomVelocity> bottomVelocity(const Pd6Velocity& s, std::int64_t stamp_n
   if (!s.bottom) return Error{"PD6 water-mass velocity is not a bottom velocity"};
   if (!s.valid) return Error{"PD6 bottom velocity status V (invalid)"};
   for (std::size_t i = 0; i < 3; ++i) {
-    if (!s.component_valid[i]) return Error{std::string("PD6 bottom velocity component ") + "xyz"[i] + " is -32768 (bad)"};
+    if (!s.component_valid[i])
+      return Error{std::string("PD6 bottom velocity component ") + "xyz"[i] + " is -32768 (bad)"};
   }
   BottomVelocity out;
   out.stamp_ns = stamp_ns;

@@ -66,7 +66,8 @@ codec::DecodeResult<ImuSample> ImuCanCodec::decode(std::span<const std::uint8_t>
                           "IMU CAN: frame " + hexId(first.can_id & CAN_EFF_MASK) + " does not start a sample");
   }
   if (first.len != 8) {
-    return ResultCan::bad(BadKind::kMalformed, kRecordBytes, "IMU CAN: first frame has " + std::to_string(first.len) + " bytes, need 8");
+    return ResultCan::bad(BadKind::kMalformed, kRecordBytes,
+                          "IMU CAN: first frame has " + std::to_string(first.len) + " bytes, need 8");
   }
   std::array<can_frame, 4> frames{first};
   for (std::size_t k = 1; k < 4; ++k) {
@@ -96,8 +97,8 @@ codec::DecodeResult<ImuSample> ImuCanCodec::decode(std::span<const std::uint8_t>
   s.attitude = ImuAttitude{i16At(frames[0], 1) * can_layout::kAttitudeScale_rad,
                            i16At(frames[0], 3) * can_layout::kAttitudeScale_rad,
                            i16At(frames[0], 5) * can_layout::kAttitudeScale_rad};
-  s.angular_rate_radps = Eigen::Vector3d(i16At(frames[1], 1), i16At(frames[1], 3), i16At(frames[1], 5)) *
-                         can_layout::kRateScale_radps;
+  s.angular_rate_radps =
+      Eigen::Vector3d(i16At(frames[1], 1), i16At(frames[1], 3), i16At(frames[1], 5)) * can_layout::kRateScale_radps;
   s.delta_velocity_mps = Eigen::Vector3d(i16At(frames[2], 1), i16At(frames[2], 3), i16At(frames[2], 5)) *
                          can_layout::kDeltaVelocityScale_mps;
   s.dt_s = dt_us * can_layout::kDtScale_s;
@@ -124,13 +125,15 @@ void putI16(can_frame& f, std::size_t at, std::int16_t v) {
 
 }  // namespace
 
-Result<std::array<can_frame, can_layout::kFramesPerSample>> encodeImuCan(const ImuSample& s, const ImuCanConfig& config) {
+Result<std::array<can_frame, can_layout::kFramesPerSample>> encodeImuCan(const ImuSample& s,
+                                                                         const ImuCanConfig& config) {
   if (auto st = config.validate(); !st.ok()) return st.error();
   if (!s.attitude) return Error{"IMU CAN: the layout carries attitude; sample has none"};
   if (!s.angular_rate_radps) return Error{"IMU CAN: the layout carries angular rates; sample has none"};
   if (s.status > 0xFFFFU) return Error{"IMU CAN: status " + std::to_string(s.status) + " does not fit 16 bits"};
   const double dt_us = std::round(s.dt_s / can_layout::kDtScale_s);
-  if (!(dt_us >= 1.0 && dt_us <= 65535.0)) return Error{"IMU CAN: dt_s = " + std::to_string(s.dt_s) + " outside (0, 0.065535]"};
+  if (!(dt_us >= 1.0 && dt_us <= 65535.0))
+    return Error{"IMU CAN: dt_s = " + std::to_string(s.dt_s) + " outside (0, 0.065535]"};
 
   std::array<can_frame, 4> frames{};
   for (std::size_t k = 0; k < 4; ++k) {
@@ -140,16 +143,19 @@ Result<std::array<can_frame, can_layout::kFramesPerSample>> encodeImuCan(const I
   }
   // Yaw wrapped to [-pi, pi) so any heading fits the i16 range.
   const double yaw = std::remainder(s.attitude->yaw_rad, 2.0 * std::numbers::pi);
-  const std::array<std::pair<double, const char*>, 3> att = {
-      std::pair{s.attitude->roll_rad, "roll_rad"}, std::pair{s.attitude->pitch_rad, "pitch_rad"}, std::pair{yaw, "yaw_rad"}};
+  const std::array<std::pair<double, const char*>, 3> att = {std::pair{s.attitude->roll_rad, "roll_rad"},
+                                                             std::pair{s.attitude->pitch_rad, "pitch_rad"},
+                                                             std::pair{yaw, "yaw_rad"}};
   for (std::size_t i = 0; i < 3; ++i) {
     auto c = toCount(att[i].first, can_layout::kAttitudeScale_rad, att[i].second);
     if (!c.ok()) return c.error();
     putI16(frames[0], 1 + 2 * i, *c);
-    auto r = toCount((*s.angular_rate_radps)[static_cast<Eigen::Index>(i)], can_layout::kRateScale_radps, "angular_rate_radps");
+    auto r = toCount((*s.angular_rate_radps)[static_cast<Eigen::Index>(i)], can_layout::kRateScale_radps,
+                     "angular_rate_radps");
     if (!r.ok()) return r.error();
     putI16(frames[1], 1 + 2 * i, *r);
-    auto v = toCount(s.delta_velocity_mps[static_cast<Eigen::Index>(i)], can_layout::kDeltaVelocityScale_mps, "delta_velocity_mps");
+    auto v = toCount(s.delta_velocity_mps[static_cast<Eigen::Index>(i)], can_layout::kDeltaVelocityScale_mps,
+                     "delta_velocity_mps");
     if (!v.ok()) return v.error();
     putI16(frames[2], 1 + 2 * i, *v);
   }

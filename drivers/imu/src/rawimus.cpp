@@ -64,9 +64,9 @@ codec::DecodeResult<ImuSample> RawImusCodec::decode(std::span<const std::uint8_t
   const std::uint32_t week = readU32LE(b, body);
   const double seconds = readF64LE(b, body + 4);
   if (!std::isfinite(seconds) || seconds < 0.0 || seconds >= static_cast<double>(kSecondsPerWeek) || week > 10000) {
-    return ResultRaw::bad(BadKind::kMalformed, rawimus::kRecordBytes,
-                          "RAWIMUS: GPS time week " + std::to_string(week) + " seconds " + std::to_string(seconds) +
-                              " out of range");
+    return ResultRaw::bad(
+        BadKind::kMalformed, rawimus::kRecordBytes,
+        "RAWIMUS: GPS time week " + std::to_string(week) + " seconds " + std::to_string(seconds) + " out of range");
   }
   ImuSample s;
   const double t_s = static_cast<double>(kGpsEpochUnix_s + static_cast<std::int64_t>(week) * kSecondsPerWeek);

@@ -20,7 +20,8 @@ Status CanConfig::validate(const std::string& prefix) const {
                  "', unix_seqpacket='" + unix_seqpacket + "')"};
   }
   if (!interface.empty() && interface.size() >= IFNAMSIZ) {
-    return Error{prefix + ".interface '" + interface + "' is longer than " + std::to_string(IFNAMSIZ - 1) + " characters"};
+    return Error{prefix + ".interface '" + interface + "' is longer than " + std::to_string(IFNAMSIZ - 1) +
+                 " characters"};
   }
   if (!unix_seqpacket.empty() && unix_seqpacket.size() >= sizeof(sockaddr_un{}.sun_path)) {
     return Error{prefix + ".unix_seqpacket path is longer than " + std::to_string(sizeof(sockaddr_un{}.sun_path) - 1) +

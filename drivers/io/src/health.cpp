@@ -6,9 +6,9 @@ namespace vog::io {
 
 StampClock steadyStampClock() {
   return [] {
-    return static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                         std::chrono::steady_clock::now().time_since_epoch())
-                                         .count());
+    return static_cast<std::int64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+            .count());
   };
 }
 

@@ -38,14 +38,16 @@ Status ModbusConfig::validate(const std::string& prefix) const {
     Status s = serial.validate(prefix + ".rtu");
     if (!s.ok()) return s;
   }
-  if (slave_id < 1 || slave_id > 247) return Error{prefix + ".slave_id must be in [1, 247], got " + std::to_string(slave_id)};
+  if (slave_id < 1 || slave_id > 247)
+    return Error{prefix + ".slave_id must be in [1, 247], got " + std::to_string(slave_id)};
   if (response_timeout_ms < 1 || response_timeout_ms > 60000) {
     return Error{prefix + ".response_timeout_ms must be in [1, 60000], got " + std::to_string(response_timeout_ms)};
   }
   return Status::success();
 }
 
-ModbusClient::ModbusClient(ModbusConfig config, StampClock clock) : config_(std::move(config)), clock_(std::move(clock)) {}
+ModbusClient::ModbusClient(ModbusConfig config, StampClock clock)
+    : config_(std::move(config)), clock_(std::move(clock)) {}
 
 ModbusClient::~ModbusClient() = default;
 

@@ -13,9 +13,9 @@ namespace vog::io {
 namespace {
 
 // Rates termios can express (Bxxx constants); others cannot be set on Linux without BOTHER.
-constexpr std::array<unsigned, 18> kStandardBauds = {300,    600,    1200,   2400,   4800,   9600,
-                                                      19200,  38400,  57600,  115200, 230400, 460800,
-                                                      500000, 576000, 921600, 1000000, 1500000, 2000000};
+constexpr std::array<unsigned, 18> kStandardBauds = {300,    600,    1200,   2400,    4800,    9600,
+                                                     19200,  38400,  57600,  115200,  230400,  460800,
+                                                     500000, 576000, 921600, 1000000, 1500000, 2000000};
 
 }  // namespace
 
@@ -124,9 +124,10 @@ class SerialTransport::Impl final : public detail::StreamLink<asio::serial_port>
     const bool want_parity = config_.parity != Parity::kNone;
     if (((got.c_cflag & PARENB) != 0) != want_parity ||
         (want_parity && ((got.c_cflag & PARODD) != 0) != (config_.parity == Parity::kOdd))) {
-      return Error{where + "parity " + (config_.parity == Parity::kNone  ? "none"
-                                        : config_.parity == Parity::kOdd ? "odd"
-                                                                         : "even")};
+      return Error{where + "parity " +
+                   (config_.parity == Parity::kNone  ? "none"
+                    : config_.parity == Parity::kOdd ? "odd"
+                                                     : "even")};
     }
     if (((got.c_cflag & CSTOPB) != 0) != (config_.stop_bits == 2)) {
       return Error{where + "stop bits " + std::to_string(config_.stop_bits)};
@@ -141,8 +142,8 @@ class SerialTransport::Impl final : public detail::StreamLink<asio::serial_port>
 
 SerialTransport::SerialTransport(asio::io_context& io, SerialConfig config, StampClock clock, ByteHandler on_bytes,
                                  StateHandler on_state)
-    : impl_(std::make_shared<Impl>(io, std::move(config), std::move(clock), std::move(on_bytes),
-                                   std::move(on_state))) {}
+    : impl_(std::make_shared<Impl>(io, std::move(config), std::move(clock), std::move(on_bytes), std::move(on_state))) {
+}
 
 SerialTransport::~SerialTransport() { impl_->stop(/*notify=*/false); }
 

@@ -75,16 +75,17 @@ class StreamLink : public Supervisor {
   }
 
   void writeNext(std::uint64_t gen) {
-    asio::async_write(stream_, asio::buffer(queue_.front()), [self = selfPtr(), gen](const std::error_code& ec, std::size_t n) {
-      if (!self->isCurrent(gen)) return;
-      if (ec) {
-        self->linkLost(self->linkName() + " write: " + ec.message());
-        return;
-      }
-      self->noteTx(n, 0);
-      self->queue_.pop_front();
-      if (!self->queue_.empty()) self->writeNext(gen);
-    });
+    asio::async_write(stream_, asio::buffer(queue_.front()),
+                      [self = selfPtr(), gen](const std::error_code& ec, std::size_t n) {
+                        if (!self->isCurrent(gen)) return;
+                        if (ec) {
+                          self->linkLost(self->linkName() + " write: " + ec.message());
+                          return;
+                        }
+                        self->noteTx(n, 0);
+                        self->queue_.pop_front();
+                        if (!self->queue_.empty()) self->writeNext(gen);
+                      });
   }
 
   ByteHandler on_bytes_;

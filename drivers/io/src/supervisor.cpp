@@ -10,8 +10,7 @@ Status ReconnectConfig::validate(const std::string& prefix) const {
     return Error{prefix + ".initial_delay_ms must be in [1, 600000], got " + std::to_string(initial_delay_ms)};
   }
   if (max_delay_ms < initial_delay_ms || max_delay_ms > 600000) {
-    return Error{prefix + ".max_delay_ms must be in [initial_delay_ms, 600000], got " +
-                 std::to_string(max_delay_ms)};
+    return Error{prefix + ".max_delay_ms must be in [initial_delay_ms, 600000], got " + std::to_string(max_delay_ms)};
   }
   if (!(factor >= 1.0 && factor <= 10.0)) {
     return Error{prefix + ".factor must be in [1, 10], got " + std::to_string(factor)};

@@ -82,8 +82,8 @@ class TcpClient::Impl final : public detail::StreamLink<asio::ip::tcp::socket> {
 
 TcpClient::TcpClient(asio::io_context& io, TcpClientConfig config, StampClock clock, ByteHandler on_bytes,
                      StateHandler on_state)
-    : impl_(std::make_shared<Impl>(io, std::move(config), std::move(clock), std::move(on_bytes),
-                                   std::move(on_state))) {}
+    : impl_(std::make_shared<Impl>(io, std::move(config), std::move(clock), std::move(on_bytes), std::move(on_state))) {
+}
 
 TcpClient::~TcpClient() { impl_->stop(/*notify=*/false); }
 

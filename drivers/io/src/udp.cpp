@@ -145,7 +145,8 @@ Status UdpSender::open() {
 Status UdpSender::send(std::span<const std::uint8_t> datagram) {
   if (health_.state != LinkState::kConnected) return Error{"udp sender: not open"};
   std::error_code ec;
-  const std::size_t n = socket_->socket.send_to(asio::buffer(datagram.data(), datagram.size()), socket_->destination, 0, ec);
+  const std::size_t n =
+      socket_->socket.send_to(asio::buffer(datagram.data(), datagram.size()), socket_->destination, 0, ec);
   if (ec || n != datagram.size()) {
     ++health_.errors;
     health_.last_error = "udp send to " + config_.address + ":" + std::to_string(config_.port) + ": " +

@@ -38,8 +38,8 @@ class AuxBoardMock::Impl {
     if (ctx_ == nullptr) return Error{std::string("modbus_new_tcp: ") + modbus_strerror(errno)};
     listen_fd_ = modbus_tcp_listen(ctx_, 4);
     if (listen_fd_ < 0) {
-      const std::string msg = "aux board listen on " + config_.address + ":" + std::to_string(port_) + ": " +
-                              modbus_strerror(errno);
+      const std::string msg =
+          "aux board listen on " + config_.address + ":" + std::to_string(port_) + ": " + modbus_strerror(errno);
       modbus_free(ctx_);
       ctx_ = nullptr;
       return Error{msg};
@@ -144,9 +144,9 @@ class AuxBoardMock::Impl {
   AuxBoardConfig config_;
   FaultInjector faults_;
   std::uint16_t port_ = 0;
-  modbus_t* ctx_ = nullptr;       // device thread only (after init)
-  int listen_fd_ = -1;            // device thread only
-  std::vector<int> clients_;      // device thread only
+  modbus_t* ctx_ = nullptr;   // device thread only (after init)
+  int listen_fd_ = -1;        // device thread only
+  std::vector<int> clients_;  // device thread only
   mutable std::mutex mapping_mutex_;
   modbus_mapping_t* mapping_ = nullptr;  // tables guarded by mapping_mutex_
   std::uint64_t served_ = 0;             // guarded by mapping_mutex_
@@ -165,7 +165,9 @@ Result<std::unique_ptr<AuxBoardMock>> AuxBoardMock::create(AuxBoardConfig config
 
 std::uint16_t AuxBoardMock::port() const { return impl_->port_; }
 FaultInjector& AuxBoardMock::faults() { return impl_->faults_; }
-Status AuxBoardMock::setInputRegister(int address, std::uint16_t value) { return impl_->setRegister(false, address, value); }
+Status AuxBoardMock::setInputRegister(int address, std::uint16_t value) {
+  return impl_->setRegister(false, address, value);
+}
 Status AuxBoardMock::setHoldingRegister(int address, std::uint16_t value) {
   return impl_->setRegister(true, address, value);
 }

@@ -25,14 +25,11 @@ std::vector<std::uint8_t> FaultInjector::apply(std::vector<std::uint8_t> message
       out.insert(out.end(), message.begin(), message.end());
       return out;
     }
-    case Fault::kTruncate:
-      message.resize(message.size() > 1 ? message.size() / 2 : message.size());
-      return message;
+    case Fault::kTruncate: message.resize(message.size() > 1 ? message.size() / 2 : message.size()); return message;
     case Fault::kBadChecksum:
       if (corrupt) corrupt(message);
       return message;
-    case Fault::kDropout:
-      return {};
+    case Fault::kDropout: return {};
   }
   return message;
 }

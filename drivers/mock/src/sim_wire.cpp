@@ -50,9 +50,9 @@ dvl::DvlClock clockFromUnixNs(std::int64_t unix_ns) {
 }  // namespace
 
 Status SimWireConfig::validate() const {
-  for (const auto& [v, key] : {std::pair{dvl_mount_roll_rad, "dvl_mount_roll_rad"},
-                               std::pair{dvl_mount_pitch_rad, "dvl_mount_pitch_rad"},
-                               std::pair{dvl_mount_yaw_rad, "dvl_mount_yaw_rad"}}) {
+  for (const auto& [v, key] :
+       {std::pair{dvl_mount_roll_rad, "dvl_mount_roll_rad"}, std::pair{dvl_mount_pitch_rad, "dvl_mount_pitch_rad"},
+        std::pair{dvl_mount_yaw_rad, "dvl_mount_yaw_rad"}}) {
     if (!std::isfinite(v) || std::abs(v) > 2 * std::numbers::pi) {
       return Error{std::string("sim_wire.") + key + " must be finite and within [-2 pi, 2 pi], got " + fmt(v)};
     }
@@ -118,7 +118,8 @@ Result<dvl::DvlEnsemble> toPd0Ensemble(const sim::DvlSample& sample, std::uint32
   e.fixed.n_beams = 4;
   e.fixed.pings_per_ensemble = 1;
   e.fixed.coordinate_frame = dvl::CoordinateFrame::kInstrument;
-  e.fixed.coordinate_transform = static_cast<std::uint8_t>(static_cast<unsigned>(dvl::CoordinateFrame::kInstrument) << 3);
+  e.fixed.coordinate_transform =
+      static_cast<std::uint8_t>(static_cast<unsigned>(dvl::CoordinateFrame::kInstrument) << 3);
   e.fixed.beam_angle_deg = config.dvl_beam_angle_deg;
   e.variable.ensemble_number = ensemble_number;
   e.variable.clock = clockFromUnixNs(config.epoch_unix_ns + sample.stamp_ns);

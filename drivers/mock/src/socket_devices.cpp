@@ -38,16 +38,12 @@ Status ImuMock::send(const imu::ImuSample& sample) {
       records.insert(records.begin(), {noise16, noise7});
       break;
     }
-    case Fault::kTruncate:
-      records.resize(2);
-      break;
+    case Fault::kTruncate: records.resize(2); break;
     case Fault::kBadChecksum:
       // Frame 3 bytes 6-7 hold the CRC-16 (drivers/imu/README.md); the data starts at offset 8.
       records[3][8 + 7] ^= 0xFF;
       break;
-    case Fault::kDropout:
-      records.clear();
-      break;
+    case Fault::kDropout: records.clear(); break;
   }
   server_->send(std::move(records));
   return Status::success();
@@ -109,14 +105,9 @@ Status SonarMock::send(const sonar::SonarFrame& frame, std::size_t payload_bytes
           if (!s.ok()) return s;
           break;
         }
-        case Fault::kTruncate:
-          d.resize(d.size() / 2);
-          break;
-        case Fault::kBadChecksum:
-          d[sonar::udp::kHeaderBytes] ^= 0x01;
-          break;
-        case Fault::kDropout:
-          continue;
+        case Fault::kTruncate: d.resize(d.size() / 2); break;
+        case Fault::kBadChecksum: d[sonar::udp::kHeaderBytes] ^= 0x01; break;
+        case Fault::kDropout: continue;
       }
     }
     Status s = sendDatagram(d);

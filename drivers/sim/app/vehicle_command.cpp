@@ -25,9 +25,10 @@
 namespace vogsim {
 
 VehicleCommand::VehicleCommand(CLI::App& app) {
-  sub_ = app.add_subcommand("vehicle",
-                            "Run the simulated vehicle in paced simulated time behind mock devices (ptys, CAN stand-in, "
-                            "UDP sonar, backseat TCP)");
+  sub_ =
+      app.add_subcommand("vehicle",
+                         "Run the simulated vehicle in paced simulated time behind mock devices (ptys, CAN stand-in, "
+                         "UDP sonar, backseat TCP)");
   sub_->add_option("--scene", scene_file_, "Scene YAML file")->required()->check(CLI::ExistingFile);
   sub_->add_option("--seed", seed_, "Random seed");
   sub_->add_option("--speedup", speedup_, "Simulated seconds per wall second")->check(CLI::Range(0.01, 1000.0));
@@ -124,10 +125,11 @@ int VehicleCommand::run() {
     v.stop();
     return 2;
   }
-  spdlog::info("vehicle running: scene {} seed {} speedup {}; dvl {} depth {} imu {} sonar udp 127.0.0.1:{} backseat "
-               "tcp 127.0.0.1:{}; endpoints {}",
-               endpoints.scene_name, seed_, speedup_, endpoints.dvl_device, endpoints.depth_device,
-               endpoints.imu_unix_seqpacket, endpoints.sonar_port, endpoints.backseat_port, endpoints_file.string());
+  spdlog::info(
+      "vehicle running: scene {} seed {} speedup {}; dvl {} depth {} imu {} sonar udp 127.0.0.1:{} backseat "
+      "tcp 127.0.0.1:{}; endpoints {}",
+      endpoints.scene_name, seed_, speedup_, endpoints.dvl_device, endpoints.depth_device, endpoints.imu_unix_seqpacket,
+      endpoints.sonar_port, endpoints.backseat_port, endpoints_file.string());
 
   // Control lines on stdin, replies on stdout.
   std::atomic<bool> quit{false};
@@ -179,11 +181,12 @@ int VehicleCommand::run() {
   std::error_code ec;
   std::filesystem::remove(endpoints_file, ec);
   if (own_run_dir) std::filesystem::remove_all(run_dir, ec);
-  spdlog::info("stopped in {:.0f} ms: {:.1f} s simulated, {} scans, {} dvl, {} imu, {} depth samples, {} of {} "
-               "commands accepted, max lag {:.1f} ms, {:.2f} ms per ping step",
-               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_stop).count(),
-               static_cast<double>(s.stamp_ns) * 1e-9, s.scans, s.dvl_sent, s.imu_sent, s.depth_sent,
-               s.commands_accepted, s.commands_accepted + s.commands_rejected, s.max_lag_ms, s.ping_step_ms_mean);
+  spdlog::info(
+      "stopped in {:.0f} ms: {:.1f} s simulated, {} scans, {} dvl, {} imu, {} depth samples, {} of {} "
+      "commands accepted, max lag {:.1f} ms, {:.2f} ms per ping step",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_stop).count(),
+      static_cast<double>(s.stamp_ns) * 1e-9, s.scans, s.dvl_sent, s.imu_sent, s.depth_sent, s.commands_accepted,
+      s.commands_accepted + s.commands_rejected, s.max_lag_ms, s.ping_step_ms_mean);
   return exit_code;
 }
 

@@ -89,15 +89,18 @@ int main(int argc, char** argv) {
   std::string scene_file;
   std::string out_dir;
 
-  auto* render = app.add_subcommand("render", "Export the scene's ground-truth cloud (PLY), observable subset and top view (PNG)");
+  auto* render =
+      app.add_subcommand("render", "Export the scene's ground-truth cloud (PLY), observable subset and top view (PNG)");
   double spacing_m = 0.05, px_per_m = 40.0, viewpoint_spacing_m = 0.5, max_range_m = 11.0;
   bool no_observable = false;
   render->add_option("--scene", scene_file, "Scene YAML file")->required()->check(CLI::ExistingFile);
   render->add_option("--out", out_dir, "Output directory")->required();
   render->add_option("--spacing", spacing_m, "Ground-truth point spacing, m")->check(CLI::Range(0.005, 10.0));
   render->add_option("--px-per-m", px_per_m, "Top view pixels per metre")->check(CLI::Range(1.0, 400.0));
-  render->add_option("--viewpoint-spacing", viewpoint_spacing_m, "Observable set: vehicle position grid, m")->check(CLI::Range(0.05, 10.0));
-  render->add_option("--max-range", max_range_m, "Observable set: sonar maximum range, m")->check(CLI::Range(0.1, 1000.0));
+  render->add_option("--viewpoint-spacing", viewpoint_spacing_m, "Observable set: vehicle position grid, m")
+      ->check(CLI::Range(0.05, 10.0));
+  render->add_option("--max-range", max_range_m, "Observable set: sonar maximum range, m")
+      ->check(CLI::Range(0.1, 1000.0));
   render->add_flag("--no-observable", no_observable, "Skip the observable set");
 
   auto* survey = app.add_subcommand("survey", "Drive a scripted path and record every sensor stream and ground truth");
@@ -155,9 +158,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  spdlog::info("survey: {} scans, {} frames, {:.1f} s simulated in {:.2f} s, path {:.1f} m, {} waypoints reached, "
-               "{} skipped, {} refused moves; written to {}",
-               sum->n_scans, sum->n_frames, sum->duration_s, wall_s, sum->path_length_m, sum->waypoints_reached,
-               sum->waypoints_skipped, sum->collisions_refused, out_dir);
+  spdlog::info(
+      "survey: {} scans, {} frames, {:.1f} s simulated in {:.2f} s, path {:.1f} m, {} waypoints reached, "
+      "{} skipped, {} refused moves; written to {}",
+      sum->n_scans, sum->n_frames, sum->duration_s, wall_s, sum->path_length_m, sum->waypoints_reached,
+      sum->waypoints_skipped, sum->collisions_refused, out_dir);
   return 0;
 }

@@ -81,8 +81,7 @@ void LockstepSimulation::emit(const geometry::Pose3& T_odom, SimulationSink& sin
     next_depth_ns_ += depth_period_ns_;
   }
   if (s.stamp_ns >= next_sonar_ns_) {
-    const bool with_frame =
-        config_.frame_every > 0 && n_scans_ % static_cast<std::uint32_t>(config_.frame_every) == 0;
+    const bool with_frame = config_.frame_every > 0 && n_scans_ % static_cast<std::uint32_t>(config_.frame_every) == 0;
     const geometry::Pose3 T_true = s.T_world_vehicle();
     const SonarPing ping = sonar_.ping(T_true, s.stamp_ns, with_frame, n_frames_);
     sink.scan(n_scans_, ping, T_true, T_odom);

@@ -28,9 +28,11 @@ Status OdometryNoiseConfig::validate() const {
   if (!positiveFinite(rate_hz) || rate_hz > 100000.0) return bad("odometry.rate_hz", rate_hz, "in (0, 100000]");
   if (!nonNegativeFinite(sigma2_x_m2ps)) return bad("odometry.sigma2_x_m2ps", sigma2_x_m2ps, "finite and >= 0");
   if (!nonNegativeFinite(sigma2_y_m2ps)) return bad("odometry.sigma2_y_m2ps", sigma2_y_m2ps, "finite and >= 0");
-  if (!nonNegativeFinite(sigma2_yaw_rad2ps)) return bad("odometry.sigma2_yaw_rad2ps", sigma2_yaw_rad2ps, "finite and >= 0");
+  if (!nonNegativeFinite(sigma2_yaw_rad2ps))
+    return bad("odometry.sigma2_yaw_rad2ps", sigma2_yaw_rad2ps, "finite and >= 0");
   if (!nonNegativeFinite(z_sigma_m)) return bad("odometry.z_sigma_m", z_sigma_m, "finite and >= 0");
-  if (!nonNegativeFinite(roll_pitch_sigma_rad)) return bad("odometry.roll_pitch_sigma_rad", roll_pitch_sigma_rad, "finite and >= 0");
+  if (!nonNegativeFinite(roll_pitch_sigma_rad))
+    return bad("odometry.roll_pitch_sigma_rad", roll_pitch_sigma_rad, "finite and >= 0");
   if (world_frame_xy_noise && sigma2_x_m2ps != sigma2_y_m2ps) {
     return Error{"odometry.world_frame_xy_noise needs sigma2_x_m2ps = sigma2_y_m2ps (an isotropic x-y noise), got " +
                  std::to_string(sigma2_x_m2ps) + " and " + std::to_string(sigma2_y_m2ps)};
@@ -41,7 +43,8 @@ Status OdometryNoiseConfig::validate() const {
 Eigen::Vector3d OdometryNoiseConfig::predictedVariance(double T_s) const {
   const Eigen::Vector3d sigma(sigma2_x_m2ps, sigma2_y_m2ps, sigma2_yaw_rad2ps);
   // Eq. 4.1 literal: T/dt steps of variance dt^2 Sigma; random walk: T/dt steps of dt Sigma.
-  return profile == OdometryNoiseProfile::kEq41Literal ? Eigen::Vector3d(T_s * dt_s() * sigma) : Eigen::Vector3d(T_s * sigma);
+  return profile == OdometryNoiseProfile::kEq41Literal ? Eigen::Vector3d(T_s * dt_s() * sigma)
+                                                       : Eigen::Vector3d(T_s * sigma);
 }
 
 Result<OdometryCorruptor> OdometryCorruptor::create(const OdometryNoiseConfig& config, std::uint64_t seed) {
@@ -57,8 +60,8 @@ OdometryCorruptor::OdometryCorruptor(const OdometryNoiseConfig& config, std::uin
   const Eigen::Vector3d sigma2(config_.sigma2_x_m2ps, config_.sigma2_y_m2ps, config_.sigma2_yaw_rad2ps);
   const double dt = config_.dt_s();
   sigma_step_ = config_.profile == OdometryNoiseProfile::kEq41Literal
-                    ? Eigen::Vector3d(dt * sigma2.cwiseSqrt())          // dt * N(0, Sigma)
-                    : Eigen::Vector3d((dt * sigma2).cwiseSqrt());       // N(0, dt * Sigma)
+                    ? Eigen::Vector3d(dt * sigma2.cwiseSqrt())     // dt * N(0, Sigma)
+                    : Eigen::Vector3d((dt * sigma2).cwiseSqrt());  // N(0, dt * Sigma)
 }
 
 void OdometryCorruptor::reset(double x_m, double y_m, double yaw_rad) {
@@ -110,12 +113,16 @@ Status NavSensorConfig::validate() const {
   if (!nonNegativeFinite(dvl_sigma_mps)) return bad("nav.dvl_sigma_mps", dvl_sigma_mps, "finite and >= 0");
   if (!positiveFinite(dvl_max_altitude_m)) return bad("nav.dvl_max_altitude_m", dvl_max_altitude_m, "finite and > 0");
   if (!positiveFinite(imu_rate_hz)) return bad("nav.imu_rate_hz", imu_rate_hz, "finite and > 0");
-  if (!nonNegativeFinite(imu_roll_pitch_sigma_rad)) return bad("nav.imu_roll_pitch_sigma_rad", imu_roll_pitch_sigma_rad, "finite and >= 0");
+  if (!nonNegativeFinite(imu_roll_pitch_sigma_rad))
+    return bad("nav.imu_roll_pitch_sigma_rad", imu_roll_pitch_sigma_rad, "finite and >= 0");
   if (!nonNegativeFinite(imu_yaw_sigma_rad)) return bad("nav.imu_yaw_sigma_rad", imu_yaw_sigma_rad, "finite and >= 0");
-  if (!nonNegativeFinite(imu_yaw_drift_rad2ps)) return bad("nav.imu_yaw_drift_rad2ps", imu_yaw_drift_rad2ps, "finite and >= 0");
-  if (!nonNegativeFinite(imu_rate_sigma_radps)) return bad("nav.imu_rate_sigma_radps", imu_rate_sigma_radps, "finite and >= 0");
+  if (!nonNegativeFinite(imu_yaw_drift_rad2ps))
+    return bad("nav.imu_yaw_drift_rad2ps", imu_yaw_drift_rad2ps, "finite and >= 0");
+  if (!nonNegativeFinite(imu_rate_sigma_radps))
+    return bad("nav.imu_rate_sigma_radps", imu_rate_sigma_radps, "finite and >= 0");
   if (!positiveFinite(depth_rate_hz)) return bad("nav.depth_rate_hz", depth_rate_hz, "finite and > 0");
-  if (!nonNegativeFinite(depth_noise_fraction)) return bad("nav.depth_noise_fraction", depth_noise_fraction, "finite and >= 0");
+  if (!nonNegativeFinite(depth_noise_fraction))
+    return bad("nav.depth_noise_fraction", depth_noise_fraction, "finite and >= 0");
   if (!positiveFinite(depth_full_scale_m)) return bad("nav.depth_full_scale_m", depth_full_scale_m, "finite and > 0");
   return {};
 }
@@ -161,8 +168,9 @@ ImuSample NavSensorModel::imu(const VehicleState& truth) {
   s.rpy_rad.x() = config_.imu_roll_pitch_sigma_rad * n01(imu_rng_);
   s.rpy_rad.y() = config_.imu_roll_pitch_sigma_rad * n01(imu_rng_);
   s.rpy_rad.z() = geometry::wrapAngle(truth.yaw_rad + yaw_drift_rad_ + config_.imu_yaw_sigma_rad * n01(imu_rng_));
-  s.angular_rate_vehicle_radps = Eigen::Vector3d(0.0, 0.0, truth.yaw_rate_radps) +
-                                 config_.imu_rate_sigma_radps * Eigen::Vector3d(n01(imu_rng_), n01(imu_rng_), n01(imu_rng_));
+  s.angular_rate_vehicle_radps =
+      Eigen::Vector3d(0.0, 0.0, truth.yaw_rate_radps) +
+      config_.imu_rate_sigma_radps * Eigen::Vector3d(n01(imu_rng_), n01(imu_rng_), n01(imu_rng_));
   return s;
 }
 

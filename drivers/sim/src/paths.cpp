@@ -11,13 +11,15 @@
 namespace vog::sim {
 
 Status PathConfig::validate() const {
-  if (!(margin_m >= 0.0) || !std::isfinite(margin_m)) return Error{"path.margin_m must be finite and >= 0, got " + std::to_string(margin_m)};
+  if (!(margin_m >= 0.0) || !std::isfinite(margin_m))
+    return Error{"path.margin_m must be finite and >= 0, got " + std::to_string(margin_m)};
   if (!(lane_spacing_m > 0.0) || !std::isfinite(lane_spacing_m))
     return Error{"path.lane_spacing_m must be finite and > 0, got " + std::to_string(lane_spacing_m)};
   if (!(orbit_radius_m >= 0.0) || !std::isfinite(orbit_radius_m))
     return Error{"path.orbit_radius_m must be finite and >= 0, got " + std::to_string(orbit_radius_m)};
   if (std::isinf(z_m)) return Error{"path.z_m must be finite (or unset), got " + std::to_string(z_m)};
-  if (orbit_points < 4 || orbit_points > 3600) return Error{"path.orbit_points must be in [4, 3600], got " + std::to_string(orbit_points)};
+  if (orbit_points < 4 || orbit_points > 3600)
+    return Error{"path.orbit_points must be in [4, 3600], got " + std::to_string(orbit_points)};
   return {};
 }
 
@@ -99,7 +101,8 @@ Result<std::vector<Waypoint>> loadWaypointFile(const std::filesystem::path& file
     if (!w.IsMap()) return Error{at(w) + key + ": must be a mapping {xyz: [x, y, z], yaw_deg: d}"};
     for (const auto& kv : w) {
       const std::string k = kv.first.Scalar();
-      if (k != "xyz" && k != "yaw_deg") return Error{at(kv.first) + key + "." + k + ": unknown key (allowed: xyz, yaw_deg)"};
+      if (k != "xyz" && k != "yaw_deg")
+        return Error{at(kv.first) + key + "." + k + ": unknown key (allowed: xyz, yaw_deg)"};
     }
     const YAML::Node xyz = w["xyz"];
     if (!xyz || !xyz.IsSequence() || xyz.size() != 3) return Error{at(w) + key + ".xyz: must be a list of 3 numbers"};

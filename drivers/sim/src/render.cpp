@@ -71,7 +71,8 @@ Result<geometry::PointCloud> readPly(const std::filesystem::path& file) {
     return Error{file.string() + ": vertex properties must start with x y z"};
   geometry::PointCloud cloud;
   for (std::size_t i = 0; i < n_vertices; ++i) {
-    if (!std::getline(in, line)) return Error{file.string() + ": expected " + std::to_string(n_vertices) + " vertices, got " + std::to_string(i)};
+    if (!std::getline(in, line))
+      return Error{file.string() + ": expected " + std::to_string(n_vertices) + " vertices, got " + std::to_string(i)};
     ++line_no;
     std::istringstream ls(line);
     std::vector<double> v(props.size());
@@ -114,7 +115,8 @@ RgbImage renderTopView(const World& world, const geometry::PointCloud& surface, 
   for (const auto& p : surface.points) {
     const Eigen::Vector2i q = px(p.head<2>());
     if (q.x() < 0 || q.y() < 0 || q.x() >= img.width || q.y() >= img.height) continue;
-    double& t = top[static_cast<std::size_t>(q.y()) * static_cast<std::size_t>(img.width) + static_cast<std::size_t>(q.x())];
+    double& t =
+        top[static_cast<std::size_t>(q.y()) * static_cast<std::size_t>(img.width) + static_cast<std::size_t>(q.x())];
     if (p.z() <= t) continue;
     t = p.z();
     std::uint8_t r, g, b;

@@ -135,7 +135,8 @@ class Parser {
       o.type = ObjectType::kBox;
       o.size_m = vector<3>(node["size"], key + ".size");
       for (int i = 0; i < 3; ++i)
-        if (!(o.size_m[i] > 0.0)) fail(node["size"], key + ".size", "every extent must be > 0, got " + formatNumber(o.size_m[i]));
+        if (!(o.size_m[i] > 0.0))
+          fail(node["size"], key + ".size", "every extent must be > 0, got " + formatNumber(o.size_m[i]));
     } else if (type == "plane") {
       checkKeys(node, key, with({"size"}), {"pose", "size"});
       o.type = ObjectType::kPlane;
@@ -178,8 +179,9 @@ class Parser {
     const Eigen::Vector3d hi = vector<3>(b["max"], "bounds.max");
     for (int i = 0; i < 3; ++i) {
       if (!(hi[i] > lo[i]))
-        fail(b, "bounds", "max must exceed min on every axis, axis " + std::to_string(i) + ": min " +
-                              formatNumber(lo[i]) + ", max " + formatNumber(hi[i]));
+        fail(b, "bounds",
+             "max must exceed min on every axis, axis " + std::to_string(i) + ": min " + formatNumber(lo[i]) +
+                 ", max " + formatNumber(hi[i]));
     }
     s.bounds_world = Eigen::AlignedBox3d(lo, hi);
 

@@ -82,7 +82,8 @@ SonarPing SonarModel::ping(const geometry::Pose3& T_world_vehicle, std::int64_t 
   for (std::size_t b = 0; b < n_beams; ++b) {
     double nearest = std::numeric_limits<double>::infinity();
     for (int k = 0; k < n_sub; ++k) {
-      const Eigen::Vector3d dir = R * sub_ray_dirs_sensor_[b * static_cast<std::size_t>(n_sub) + static_cast<std::size_t>(k)];
+      const Eigen::Vector3d dir =
+          R * sub_ray_dirs_sensor_[b * static_cast<std::size_t>(n_sub) + static_cast<std::size_t>(k)];
       const auto hit = world_->castRay(origin, dir, cast_range);
       if (!hit) continue;
       nearest = std::min(nearest, hit->range_m);
@@ -120,7 +121,8 @@ SonarPing SonarModel::ping(const geometry::Pose3& T_world_vehicle, std::int64_t 
     const double first = static_cast<double>(out.scan.range_m[b]);
     for (int s = 0; s < f.n_samples; ++s) {
       const double shadow = std::isfinite(first) && f.rangeOfSample_m(s) > first + config_.pulse_length_m ? 0.5 : 1.0;
-      column[static_cast<std::size_t>(s)] = shadow * config_.noise_floor * rayleigh_sigma * std::sqrt(2.0 * exp1(frame_rng_));
+      column[static_cast<std::size_t>(s)] =
+          shadow * config_.noise_floor * rayleigh_sigma * std::sqrt(2.0 * exp1(frame_rng_));
     }
     if (std::isfinite(first)) {
       for (int k = 0; k < n_sub; ++k) {
@@ -130,16 +132,18 @@ SonarPing SonarModel::ping(const geometry::Pose3& T_world_vehicle, std::int64_t 
         // Mild speckle on the echo itself (gamma with shape 16: mean 1, sd 0.25) keeps the peak
         // well above the floor, as the concentrator lens' strong returns do.
         std::gamma_distribution<double> echo_speckle(16.0, 1.0 / 16.0);
-        const double amp = (config_.echo_peak - config_.noise_floor) * (0.7 + 0.3 * sub_strength[i]) *
-                           echo_speckle(frame_rng_);
+        const double amp =
+            (config_.echo_peak - config_.noise_floor) * (0.7 + 0.3 * sub_strength[i]) * echo_speckle(frame_rng_);
         const double tail_end = r + config_.pulse_length_m + 6.0 * config_.echo_decay_m;
         const int s_lo = std::max(0, static_cast<int>(std::floor((r - f.window_start_m) / ds)));
         const int s_hi = std::min(f.n_samples - 1, static_cast<int>(std::ceil((tail_end - f.window_start_m) / ds)));
         for (int s = s_lo; s <= s_hi; ++s) {
           const double c = f.rangeOfSample_m(s);
           // Share of the sample [c - ds/2, c + ds/2] covered by the pulse [r, r + L].
-          const double covered = std::clamp(std::min(c + 0.5 * ds, r + config_.pulse_length_m) - std::max(c - 0.5 * ds, r), 0.0, ds) / ds;
-          const double tail = c > r + config_.pulse_length_m ? std::exp(-(c - r - config_.pulse_length_m) / config_.echo_decay_m) : 0.0;
+          const double covered =
+              std::clamp(std::min(c + 0.5 * ds, r + config_.pulse_length_m) - std::max(c - 0.5 * ds, r), 0.0, ds) / ds;
+          const double tail =
+              c > r + config_.pulse_length_m ? std::exp(-(c - r - config_.pulse_length_m) / config_.echo_decay_m) : 0.0;
           column[static_cast<std::size_t>(s)] += amp * std::max(covered, tail);
         }
       }

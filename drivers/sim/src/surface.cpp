@@ -70,7 +70,8 @@ Status ObservableConfig::validate() const {
   if (!(collision_box_m.minCoeff() > 0.0) || !collision_box_m.allFinite())
     return Error{"observable.collision_box_m must be finite and > 0 on every axis"};
   if (!(viewpoint_spacing_m >= 0.05) || !std::isfinite(viewpoint_spacing_m))
-    return Error{"observable.viewpoint_spacing_m must be finite and >= 0.05, got " + std::to_string(viewpoint_spacing_m)};
+    return Error{"observable.viewpoint_spacing_m must be finite and >= 0.05, got " +
+                 std::to_string(viewpoint_spacing_m)};
   return {};
 }
 
@@ -109,9 +110,10 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
 
   // Cell offsets sorted by length: nearest viewpoints are tried first, so a visible point usually
   // stops after a few rays.
-  const Eigen::Vector3i reach = (Eigen::Vector3d::Constant(config.max_range_m).cwiseQuotient(step).array().ceil().cast<int>() + 1)
-                                    .matrix()
-                                    .cwiseMin(dims);
+  const Eigen::Vector3i reach =
+      (Eigen::Vector3d::Constant(config.max_range_m).cwiseQuotient(step).array().ceil().cast<int>() + 1)
+          .matrix()
+          .cwiseMin(dims);
   std::vector<std::pair<double, Eigen::Vector3i>> offsets;
   for (int z = -reach.z(); z <= reach.z(); ++z)
     for (int y = -reach.y(); y <= reach.y(); ++y)
@@ -124,7 +126,8 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
   ObservableResult result;
   result.n_viewpoints = n_free;
   const double eps = 1e-6;
-  const Eigen::AlignedBox3d inside(box.min() - Eigen::Vector3d::Constant(eps), box.max() + Eigen::Vector3d::Constant(eps));
+  const Eigen::AlignedBox3d inside(box.min() - Eigen::Vector3d::Constant(eps),
+                                   box.max() + Eigen::Vector3d::Constant(eps));
   for (std::size_t i = 0; i < surface.size(); ++i) {
     const Eigen::Vector3d& p = surface.points[i];
     if (!inside.contains(p)) continue;

@@ -16,7 +16,8 @@ Status SurveyConfig::validate() const {
   if (!(max_duration_s > 0.0) || !std::isfinite(max_duration_s))
     return Error{"survey.max_duration_s must be finite and > 0, got " + std::to_string(max_duration_s)};
   if (!(waypoint_timeout_factor >= 1.0) || !std::isfinite(waypoint_timeout_factor))
-    return Error{"survey.waypoint_timeout_factor must be finite and >= 1, got " + std::to_string(waypoint_timeout_factor)};
+    return Error{"survey.waypoint_timeout_factor must be finite and >= 1, got " +
+                 std::to_string(waypoint_timeout_factor)};
   return LockstepConfig::validate();
 }
 
@@ -139,7 +140,8 @@ struct CsvSink final : SimulationSink {
   void depth(const DepthSample& m) override {
     std::fprintf(de.get(), "%lld,%.9g\n", static_cast<long long>(m.stamp_ns), m.depth_m);
   }
-  void scan(std::uint32_t idx, const SonarPing& p, const geometry::Pose3& T_true, const geometry::Pose3& T_odom) override {
+  void scan(std::uint32_t idx, const SonarPing& p, const geometry::Pose3& T_true,
+            const geometry::Pose3& T_odom) override {
     std::fprintf(sc.get(), "%lld,%u", static_cast<long long>(p.scan.stamp_ns), idx);
     for (const float r : p.scan.range_m) std::fprintf(sc.get(), ",%.9g", static_cast<double>(r));
     std::fputc('\n', sc.get());
@@ -197,8 +199,9 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
   auto legDeadline = [&]() -> std::int64_t {
     if (vehicle.waypointsLeft() == 0) return 0;
     const Waypoint& wp = waypoints[static_cast<std::size_t>(frontIndex())];
-    const double t_leg = (wp.xyz_world - vehicle.state().xyz_world).norm() / config.vehicle.max_speed_mps +
-                         std::abs(geometry::wrapAngle(wp.yaw_rad - vehicle.state().yaw_rad)) / config.vehicle.max_yaw_rate_radps;
+    const double t_leg =
+        (wp.xyz_world - vehicle.state().xyz_world).norm() / config.vehicle.max_speed_mps +
+        std::abs(geometry::wrapAngle(wp.yaw_rad - vehicle.state().yaw_rad)) / config.vehicle.max_yaw_rate_radps;
     return vehicle.state().stamp_ns + static_cast<std::int64_t>((config.waypoint_timeout_factor * t_leg + 30.0) * 1e9);
   };
 
@@ -213,8 +216,8 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
     const StepResult r = sim.step(sink);
     for (int k = 0; k < r.waypoints_reached; ++k) event("reached", front + k);
     sum.waypoints_reached += r.waypoints_reached;
-    if (r.status == MotionStatus::kBlocked || (vehicle.waypointsLeft() > 0 && vehicle.state().stamp_ns > deadline &&
-                                               frontIndex() == front)) {
+    if (r.status == MotionStatus::kBlocked ||
+        (vehicle.waypointsLeft() > 0 && vehicle.state().stamp_ns > deadline && frontIndex() == front)) {
       event(r.status == MotionStatus::kBlocked ? "blocked" : "timeout", frontIndex());
       event("skipped", frontIndex());
       vehicle.skipWaypoint();
@@ -241,24 +244,29 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
        << "scene: {name: \"" << scene.name << "\", file: \"" << scene.source_file.filename().string() << "\"}\n"
        << "path: \"" << path_label << "\"\nwaypoints: " << n_waypoints << "\nseed: " << config.seed << "\n"
        << "sim_step_hz: " << yamlDouble(config.odometry.rate_hz) << "\n"
-       << "odometry: {profile: " << toString(config.odometry.profile) << ", rate_hz: " << yamlDouble(config.odometry.rate_hz)
+       << "odometry: {profile: " << toString(config.odometry.profile)
+       << ", rate_hz: " << yamlDouble(config.odometry.rate_hz)
        << ", sigma2_x_m2ps: " << yamlDouble(config.odometry.sigma2_x_m2ps)
        << ", sigma2_y_m2ps: " << yamlDouble(config.odometry.sigma2_y_m2ps)
        << ", sigma2_yaw_rad2ps: " << yamlDouble(config.odometry.sigma2_yaw_rad2ps)
        << ", z_sigma_m: " << yamlDouble(config.odometry.z_sigma_m)
        << ", roll_pitch_sigma_rad: " << yamlDouble(config.odometry.roll_pitch_sigma_rad) << "}\n"
        << "sonar: {rate_hz: " << yamlDouble(config.sonar_rate_hz) << ", n_beams: " << fan.n_beams
-       << ", fov_deg: " << yamlDouble(geometry::rad2deg(fan.fov_rad)) << ", spread_deg: " << yamlDouble(geometry::rad2deg(fan.spread_rad))
+       << ", fov_deg: " << yamlDouble(geometry::rad2deg(fan.fov_rad))
+       << ", spread_deg: " << yamlDouble(geometry::rad2deg(fan.spread_rad))
        << ", min_range_m: " << yamlDouble(fan.min_range_m) << ", max_range_m: " << yamlDouble(fan.max_range_m)
-       << ", mount_rpy_deg: [" << yamlDouble(geometry::rad2deg(geometry::rpyFromRotation(fan.T_vehicle_sensor.linear()).x())) << ", "
+       << ", mount_rpy_deg: ["
+       << yamlDouble(geometry::rad2deg(geometry::rpyFromRotation(fan.T_vehicle_sensor.linear()).x())) << ", "
        << yamlDouble(geometry::rad2deg(geometry::rpyFromRotation(fan.T_vehicle_sensor.linear()).y())) << ", "
        << yamlDouble(geometry::rad2deg(geometry::rpyFromRotation(fan.T_vehicle_sensor.linear()).z())) << "]"
        << ", mount_xyz_m: [" << yamlDouble(fan.T_vehicle_sensor.translation().x()) << ", "
-       << yamlDouble(fan.T_vehicle_sensor.translation().y()) << ", " << yamlDouble(fan.T_vehicle_sensor.translation().z()) << "]"
+       << yamlDouble(fan.T_vehicle_sensor.translation().y()) << ", "
+       << yamlDouble(fan.T_vehicle_sensor.translation().z()) << "]"
        << ", sub_rays_per_beam: " << config.sonar.sub_rays_per_beam
        << ", range_noise_sigma_m: " << yamlDouble(config.sonar.range_noise_sigma_m)
        << ", frame_samples: " << config.sonar.frame_samples << ", frame_every: " << config.frame_every << "}\n"
-       << "nav: {dvl_rate_hz: " << yamlDouble(config.nav.dvl_rate_hz) << ", dvl_sigma_mps: " << yamlDouble(config.nav.dvl_sigma_mps)
+       << "nav: {dvl_rate_hz: " << yamlDouble(config.nav.dvl_rate_hz)
+       << ", dvl_sigma_mps: " << yamlDouble(config.nav.dvl_sigma_mps)
        << ", imu_rate_hz: " << yamlDouble(config.nav.imu_rate_hz)
        << ", imu_roll_pitch_sigma_rad: " << yamlDouble(config.nav.imu_roll_pitch_sigma_rad)
        << ", imu_yaw_sigma_rad: " << yamlDouble(config.nav.imu_yaw_sigma_rad)
@@ -267,11 +275,12 @@ Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>&
        << ", depth_sigma_m: " << yamlDouble(config.nav.depth_noise_fraction * config.nav.depth_full_scale_m) << "}\n"
        << "vehicle: {max_speed_mps: " << yamlDouble(config.vehicle.max_speed_mps)
        << ", max_yaw_rate_radps: " << yamlDouble(config.vehicle.max_yaw_rate_radps) << ", collision_box_m: ["
-       << yamlDouble(config.vehicle.collision_box_m.x()) << ", " << yamlDouble(config.vehicle.collision_box_m.y()) << ", "
-       << yamlDouble(config.vehicle.collision_box_m.z()) << "]}\n"
-       << "summary: {n_scans: " << sum.n_scans << ", n_frames: " << sum.n_frames << ", duration_s: " << yamlDouble(sum.duration_s)
-       << ", path_length_m: " << yamlDouble(sum.path_length_m) << ", waypoints_reached: " << sum.waypoints_reached
-       << ", waypoints_skipped: " << sum.waypoints_skipped << ", collisions_refused: " << sum.collisions_refused << "}\n";
+       << yamlDouble(config.vehicle.collision_box_m.x()) << ", " << yamlDouble(config.vehicle.collision_box_m.y())
+       << ", " << yamlDouble(config.vehicle.collision_box_m.z()) << "]}\n"
+       << "summary: {n_scans: " << sum.n_scans << ", n_frames: " << sum.n_frames
+       << ", duration_s: " << yamlDouble(sum.duration_s) << ", path_length_m: " << yamlDouble(sum.path_length_m)
+       << ", waypoints_reached: " << sum.waypoints_reached << ", waypoints_skipped: " << sum.waypoints_skipped
+       << ", collisions_refused: " << sum.collisions_refused << "}\n";
   meta.close();
   if (!meta) return Error{"error while writing " + (out_dir / "meta.yaml").string()};
   return sum;
@@ -301,7 +310,8 @@ Result<std::vector<RecordedScan>> readScans(const std::filesystem::path& scans_c
     if (*end != '\0') return Error{where + "bad scan_index '" + fields[1] + "'"};
     for (std::size_t i = 2; i < fields.size(); ++i) {
       const double v = std::strtod(fields[i].c_str(), &end);
-      if (*end != '\0' || std::isnan(v) || v < 0.0) return Error{where + "bad range '" + fields[i] + "' in column " + std::to_string(i)};
+      if (*end != '\0' || std::isnan(v) || v < 0.0)
+        return Error{where + "bad range '" + fields[i] + "' in column " + std::to_string(i)};
       r.scan.range_m.push_back(static_cast<float>(v));
     }
     out.push_back(std::move(r));
@@ -319,7 +329,8 @@ Result<std::vector<RecordedFrame>> readFrames(const std::filesystem::path& frame
   std::vector<RecordedFrame> out;
   std::size_t off = 0;
   while (off < data.size()) {
-    const std::string where = frames_bin.string() + ": frame " + std::to_string(out.size()) + " at byte " + std::to_string(off) + ": ";
+    const std::string where =
+        frames_bin.string() + ": frame " + std::to_string(out.size()) + " at byte " + std::to_string(off) + ": ";
     if (data.size() - off < kFrameHeaderBytes) return Error{where + "truncated header"};
     if (std::memcmp(p + off, kFrameMagic, 4) != 0) return Error{where + "bad magic (expected VOGF)"};
     if (getLe<std::uint32_t>(p + off + 4) != kFrameVersion) return Error{where + "unsupported version"};
@@ -334,7 +345,8 @@ Result<std::vector<RecordedFrame>> readFrames(const std::filesystem::path& frame
     f.window_length_m = getLe<double>(p + off + 40);
     f.sound_speed_mps = getLe<double>(p + off + 48);
     if (f.n_beams < 1 || f.n_beams > 4096 || f.n_samples < 1 || f.n_samples > 65536)
-      return Error{where + "n_beams " + std::to_string(f.n_beams) + " or n_samples " + std::to_string(f.n_samples) + " out of range"};
+      return Error{where + "n_beams " + std::to_string(f.n_beams) + " or n_samples " + std::to_string(f.n_samples) +
+                   " out of range"};
     if (!std::isfinite(f.window_start_m) || !(f.window_length_m > 0.0) || !std::isfinite(f.window_length_m))
       return Error{where + "bad window"};
     const std::size_t n = static_cast<std::size_t>(f.n_beams) * static_cast<std::size_t>(f.n_samples);

@@ -9,7 +9,8 @@ Status VehicleConfig::validate() const {
   auto bad = [](const std::string& key, double v, const std::string& rule) {
     return Error{"vehicle." + key + " must be " + rule + ", got " + std::to_string(v)};
   };
-  if (!(max_speed_mps > 0.0) || !std::isfinite(max_speed_mps)) return bad("max_speed_mps", max_speed_mps, "finite and > 0");
+  if (!(max_speed_mps > 0.0) || !std::isfinite(max_speed_mps))
+    return bad("max_speed_mps", max_speed_mps, "finite and > 0");
   if (!(max_yaw_rate_radps > 0.0) || !std::isfinite(max_yaw_rate_radps))
     return bad("max_yaw_rate_radps", max_yaw_rate_radps, "finite and > 0");
   for (int i = 0; i < 3; ++i)
@@ -46,8 +47,9 @@ Result<VehicleModel> VehicleModel::create(const World& world, const VehicleConfi
   v.state_.xyz_world = start_xyz_world;
   v.state_.yaw_rad = geometry::wrapAngle(start_yaw_rad);
   if (v.collidesAt(start_xyz_world, start_yaw_rad))
-    return Error{"vehicle start pose (" + std::to_string(start_xyz_world.x()) + ", " + std::to_string(start_xyz_world.y()) +
-                 ", " + std::to_string(start_xyz_world.z()) + ") collides with the scene"};
+    return Error{"vehicle start pose (" + std::to_string(start_xyz_world.x()) + ", " +
+                 std::to_string(start_xyz_world.y()) + ", " + std::to_string(start_xyz_world.z()) +
+                 ") collides with the scene"};
   return v;
 }
 

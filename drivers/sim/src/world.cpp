@@ -28,15 +28,15 @@ World::~World() = default;
 Eigen::AlignedBox3d AnalyticCylinder::worldBounds() const {
   Eigen::AlignedBox3d box;
   for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector3d corner((i & 1) ? radius_m : -radius_m, (i & 2) ? radius_m : -radius_m,
-                                 (i & 4) ? z1_m : z0_m);
+    const Eigen::Vector3d corner((i & 1) ? radius_m : -radius_m, (i & 2) ? radius_m : -radius_m, (i & 4) ? z1_m : z0_m);
     box.extend(T_world_local * corner);
   }
   return box;
 }
 
-std::optional<std::pair<double, Eigen::Vector3d>> AnalyticCylinder::intersect(
-    const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir_world, double t_near, double t_far) const {
+std::optional<std::pair<double, Eigen::Vector3d>> AnalyticCylinder::intersect(const Eigen::Vector3d& origin_world,
+                                                                              const Eigen::Vector3d& dir_world,
+                                                                              double t_near, double t_far) const {
   const Eigen::Vector3d o = T_local_world * origin_world;
   const Eigen::Vector3d d = T_local_world.linear() * dir_world;
   double best_t = t_far;
@@ -108,8 +108,10 @@ void cylinderIntersect(const RTCIntersectFunctionNArguments* args) {
   RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
-    const Eigen::Vector3d o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-    const Eigen::Vector3d d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
+    const Eigen::Vector3d o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                            RTCRayN_org_z(ray, args->N, i));
+    const Eigen::Vector3d d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                            RTCRayN_dir_z(ray, args->N, i));
     const auto h = cyl.intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i));
     if (!h) continue;
     RTCRayN_tfar(ray, args->N, i) = static_cast<float>(h->first);
@@ -130,8 +132,10 @@ void cylinderOccluded(const RTCOccludedFunctionNArguments* args) {
   RTCRayN* ray = args->ray;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
-    const Eigen::Vector3d o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i));
-    const Eigen::Vector3d d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i));
+    const Eigen::Vector3d o(RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                            RTCRayN_org_z(ray, args->N, i));
+    const Eigen::Vector3d d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                            RTCRayN_dir_z(ray, args->N, i));
     if (cyl.intersect(o, d, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i)))
       RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
   }
@@ -140,10 +144,12 @@ void cylinderOccluded(const RTCOccludedFunctionNArguments* args) {
 void addBoxTriangles(const geometry::Pose3& T, const Eigen::Vector3d& size, std::vector<Triangle>& out) {
   const Eigen::Vector3d h = 0.5 * size;
   auto v = [&](int i) {
-    return Eigen::Vector3d(T * Eigen::Vector3d((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z()));
+    return Eigen::Vector3d(
+        T * Eigen::Vector3d((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z()));
   };
   // Each face as two triangles over its corner indices (bit 0: +x, bit 1: +y, bit 2: +z).
-  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   for (const auto& f : kFaces) {
     out.push_back({v(f[0]), v(f[1]), v(f[2])});
     out.push_back({v(f[0]), v(f[2]), v(f[3])});
@@ -184,7 +190,8 @@ Result<std::vector<Triangle>> loadMesh(const SceneObject& o) {
   Assimp::Importer importer;
   const aiScene* s = importer.ReadFile(o.mesh_file.string(), aiProcess_Triangulate | aiProcess_PreTransformVertices);
   if (s == nullptr)
-    return Error{o.where + ": " + o.name + ".file: cannot load mesh " + o.mesh_file.string() + ": " + importer.GetErrorString()};
+    return Error{o.where + ": " + o.name + ".file: cannot load mesh " + o.mesh_file.string() + ": " +
+                 importer.GetErrorString()};
   std::vector<Triangle> tris;
   for (unsigned m = 0; m < s->mNumMeshes; ++m) {
     const aiMesh* mesh = s->mMeshes[m];
@@ -261,10 +268,10 @@ Result<std::unique_ptr<World>> World::create(const Scene& scene, const WorldConf
   if (!w->triangles_.empty()) {
     RTCGeometry g = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
     const std::size_t n = w->triangles_.size();
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), 3 * n));
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(unsigned), n));
+    auto* vb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+    auto* ib = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
     if (vb == nullptr || ib == nullptr) {
       rtcReleaseGeometry(g);
       return Error{"embree: cannot allocate the triangle buffers"};

@@ -29,8 +29,8 @@ struct AnalyticCylinder {
   // Smallest t in (t_near, t_far) where origin + t * dir (world) meets the surface; the normal is
   // in the world frame, not yet oriented toward the ray origin.
   std::optional<std::pair<double, Eigen::Vector3d>> intersect(const Eigen::Vector3d& origin_world,
-                                                               const Eigen::Vector3d& dir_world,
-                                                               double t_near, double t_far) const;
+                                                              const Eigen::Vector3d& dir_world, double t_near,
+                                                              double t_far) const;
 };
 
 // Uniform grid over collision triangles: each cell lists the triangles whose bounding box touches

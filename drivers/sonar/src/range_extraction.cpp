@@ -10,10 +10,12 @@ namespace vog::sonar {
 
 Status RangeExtractionConfig::validate() const {
   if (!(noise_floor_percentile >= 0.0 && noise_floor_percentile <= 1.0)) {
-    return Error{"range_extraction.noise_floor_percentile: " + std::to_string(noise_floor_percentile) + " outside [0, 1]"};
+    return Error{"range_extraction.noise_floor_percentile: " + std::to_string(noise_floor_percentile) +
+                 " outside [0, 1]"};
   }
   if (!(threshold_above_noise > 0.0 && threshold_above_noise < 255.0)) {
-    return Error{"range_extraction.threshold_above_noise: " + std::to_string(threshold_above_noise) + " outside (0, 255)"};
+    return Error{"range_extraction.threshold_above_noise: " + std::to_string(threshold_above_noise) +
+                 " outside (0, 255)"};
   }
   if (min_run_samples < 1) {
     return Error{"range_extraction.min_run_samples: " + std::to_string(min_run_samples) + " must be >= 1"};
@@ -55,7 +57,8 @@ Result<geometry::RangeScan> extractRanges(const SonarFrame& frame, const RangeEx
   for (; i < total; ++i) ++partial[0][data[i]];
   std::array<std::uint32_t, 256> histogram{};
   for (std::size_t v = 0; v < 256; ++v) histogram[v] = partial[0][v] + partial[1][v] + partial[2][v] + partial[3][v];
-  const auto target = static_cast<std::uint64_t>(config.noise_floor_percentile * static_cast<double>(frame.samples.size() - 1));
+  const auto target =
+      static_cast<std::uint64_t>(config.noise_floor_percentile * static_cast<double>(frame.samples.size() - 1));
   std::uint64_t cumulative = 0;
   int floor = 255;
   for (int v = 0; v < 256; ++v) {

@@ -13,7 +13,6 @@
 namespace vog::sonar {
 namespace {
 
-
 constexpr std::uint32_t kArisSignature = 0x05464444;  // "DDF" + 0x05, little-endian
 constexpr std::size_t kArisFileHeaderBytes = 1024;
 constexpr std::size_t kArisFrameHeaderBytes = 1024;
@@ -76,7 +75,8 @@ Result<SonarRecording> decodeArisFile(std::span<const std::uint8_t> b, const Son
       rec.truncated_bytes = b.size() - pos;
       break;
     }
-    if (k >= limits.max_frames) return Error{"ARIS file has more than " + std::to_string(limits.max_frames) + " frames"};
+    if (k >= limits.max_frames)
+      return Error{"ARIS file has more than " + std::to_string(limits.max_frames) + " frames"};
     const auto h = b.subspan(pos, kArisFrameHeaderBytes);
     if (readU32LE(h, aris::kVersion) != kArisSignature) return Error{where + ": frame header version is not DDF v5"};
     ArisFrameMeta meta;
@@ -143,15 +143,16 @@ Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> fra
   writeU32LE(fh, aris::kFileFrameCount, static_cast<std::uint32_t>(frames.size()));
   writeU32LE(fh, aris::kFileNumRawBeams, static_cast<std::uint32_t>(beams));
   writeU32LE(fh, aris::kFileSamplesPerChannel, static_cast<std::uint32_t>(samples));
-  const std::size_t frame_bytes =
-      kArisFrameHeaderBytes + static_cast<std::size_t>(std::max(beams, 0)) * static_cast<std::size_t>(std::max(samples, 0));
+  const std::size_t frame_bytes = kArisFrameHeaderBytes + static_cast<std::size_t>(std::max(beams, 0)) *
+                                                              static_cast<std::size_t>(std::max(samples, 0));
   writeU64LE(fh, aris::kFileSize, kArisFileHeaderBytes + frames.size() * frame_bytes);
   std::vector<std::uint8_t> out(fh.begin(), fh.end());
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const SonarFrame& f = frames[k];
     const std::string where = "ARIS frame " + std::to_string(k);
     if (f.n_beams != beams || f.n_samples != samples) return Error{where + ": geometry differs from frame 0"};
-    if (f.n_samples <= 0 || f.samples.size() != static_cast<std::size_t>(f.n_beams) * static_cast<std::size_t>(f.n_samples)) {
+    if (f.n_samples <= 0 ||
+        f.samples.size() != static_cast<std::size_t>(f.n_beams) * static_cast<std::size_t>(f.n_samples)) {
       return Error{where + ": samples size does not match beams x samples"};
     }
     if (!(f.sound_speed_mps >= 1000.0 && f.sound_speed_mps <= 2000.0)) {

@@ -49,7 +49,8 @@ codec::DecodeResult<SonarFragment> SonarUdpCodec::decode(std::span<const std::ui
   f.window_length_m = readF64LE(b, 44);
   f.sound_speed_mps = readF64LE(b, 52);
   const std::size_t datagram = udp::kHeaderBytes + payload_bytes + udp::kCrcBytes;
-  if (datagram > udp::kMaxDatagramBytes) return malformed("payload of " + std::to_string(payload_bytes) + " bytes too large");
+  if (datagram > udp::kMaxDatagramBytes)
+    return malformed("payload of " + std::to_string(payload_bytes) + " bytes too large");
   if (f.n_beams < 1 || f.n_beams > limits_.max_beams || f.n_samples < 1 || f.n_samples > limits_.max_samples) {
     return malformed(std::to_string(f.n_beams) + " beams x " + std::to_string(f.n_samples) + " samples outside limits");
   }
@@ -64,8 +65,9 @@ codec::DecodeResult<SonarFragment> SonarUdpCodec::decode(std::span<const std::ui
   if (b.size() < datagram) return ResultUdp::needMore();
   const std::uint32_t crc = readU32LE(b, udp::kHeaderBytes + payload_bytes);
   if (crc32Ieee(b.first(udp::kHeaderBytes + payload_bytes)) != crc) {
-    return ResultUdp::bad(BadKind::kChecksum, 4, "sonar UDP: CRC mismatch in frame " + std::to_string(f.frame_index) +
-                                                     " fragment " + std::to_string(f.fragment_index));
+    return ResultUdp::bad(BadKind::kChecksum, 4,
+                          "sonar UDP: CRC mismatch in frame " + std::to_string(f.frame_index) + " fragment " +
+                              std::to_string(f.fragment_index));
   }
   // Checked after the CRC: a damaged header must count as a bad checksum, not as bad geometry.
   if (!std::isfinite(f.window_start_m) || !std::isfinite(f.window_length_m) || !(f.window_length_m > 0.0) ||
@@ -77,7 +79,8 @@ codec::DecodeResult<SonarFragment> SonarUdpCodec::decode(std::span<const std::ui
   return ResultUdp::decoded(std::move(f), datagram);
 }
 
-Result<std::vector<std::vector<std::uint8_t>>> encodeSonarDatagrams(const SonarFrame& frame, std::size_t payload_bytes) {
+Result<std::vector<std::vector<std::uint8_t>>> encodeSonarDatagrams(const SonarFrame& frame,
+                                                                    std::size_t payload_bytes) {
   const std::size_t total = frame.samples.size();
   if (frame.n_beams < 1 || frame.n_beams > 0xFFFF || frame.n_samples < 1 || frame.n_samples > 0xFFFF ||
       total != static_cast<std::size_t>(frame.n_beams) * static_cast<std::size_t>(frame.n_samples)) {
@@ -153,9 +156,9 @@ std::optional<SonarFrame> FrameReassembler::add(const SonarFragment& frag) {
     it = std::prev(partial_.end());
   } else {
     const SonarFragment& f0 = it->first;
-    if (frag.fragment_count != f0.fragment_count || frag.total_bytes != f0.total_bytes ||
-        frag.n_beams != f0.n_beams || frag.n_samples != f0.n_samples || frag.stamp_ns != f0.stamp_ns ||
-        frag.fragment_index >= f0.fragment_count || frag.offset + frag.payload.size() > f0.total_bytes) {
+    if (frag.fragment_count != f0.fragment_count || frag.total_bytes != f0.total_bytes || frag.n_beams != f0.n_beams ||
+        frag.n_samples != f0.n_samples || frag.stamp_ns != f0.stamp_ns || frag.fragment_index >= f0.fragment_count ||
+        frag.offset + frag.payload.size() > f0.total_bytes) {
       ++stats_.fragments_rejected;
       return std::nullopt;
     }

@@ -113,7 +113,8 @@ Result<std::unique_ptr<ControlServer>> ControlServer::create(const std::filesyst
   addr.sun_family = AF_UNIX;
   const std::string p = path.string();
   if (p.empty() || p.size() >= sizeof(addr.sun_path))
-    return Error{"control socket path must be 1.." + std::to_string(sizeof(addr.sun_path) - 1) + " bytes, got '" + p + "'"};
+    return Error{"control socket path must be 1.." + std::to_string(sizeof(addr.sun_path) - 1) + " bytes, got '" + p +
+                 "'"};
   std::memcpy(addr.sun_path, p.c_str(), p.size() + 1);
   const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd < 0) return Error{errnoText("control socket")};
@@ -166,8 +167,8 @@ void ControlServer::onReady(const std::vector<pollfd>& fds) {
         it->line.push_back(buf[i]);
         continue;
       }
-      std::string reply = it->line.size() > kMaxLine ? std::string("error: line longer than 1024 bytes")
-                                                     : handler_(it->line);
+      std::string reply =
+          it->line.size() > kMaxLine ? std::string("error: line longer than 1024 bytes") : handler_(it->line);
       it->line.clear();
       reply.push_back('\n');
       // Replies are short; a client that does not read them loses them rather than stall the server.

@@ -21,8 +21,8 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
   out << YAML::Key << "seed" << YAML::Value << e.seed;
   out << YAML::Key << "pid" << YAML::Value << e.pid;
   out << YAML::Key << "time" << YAML::Value << YAML::BeginMap << YAML::Key << "speedup" << YAML::Value << e.speedup
-      << YAML::Key << "steady_ns_at_sim_zero" << YAML::Value << e.steady_ns_at_sim_zero << YAML::Key
-      << "epoch_unix_ns" << YAML::Value << e.epoch_unix_ns << YAML::EndMap;
+      << YAML::Key << "steady_ns_at_sim_zero" << YAML::Value << e.steady_ns_at_sim_zero << YAML::Key << "epoch_unix_ns"
+      << YAML::Value << e.epoch_unix_ns << YAML::EndMap;
   out << YAML::Key << "origin" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "latitude_deg"
       << YAML::Value << e.origin_latitude_deg << YAML::Key << "longitude_deg" << YAML::Value << e.origin_longitude_deg
       << YAML::EndMap;
@@ -32,10 +32,10 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
   out << YAML::Key << "dvl" << YAML::Value << YAML::BeginMap << YAML::Key << "format" << YAML::Value << "pd0"
       << YAML::Key << "device" << YAML::Value << e.dvl_device << YAML::Key << "baud" << YAML::Value << e.dvl_baud
       << YAML::Key << "mount_yaw_deg" << YAML::Value << e.dvl_mount_yaw_deg << YAML::EndMap;
-  out << YAML::Key << "depth" << YAML::Value << YAML::BeginMap << YAML::Key << "device" << YAML::Value
-      << e.depth_device << YAML::Key << "baud" << YAML::Value << e.depth_baud << YAML::Key << "units_code"
-      << YAML::Value << e.depth_units_code << YAML::Key << "latitude_deg" << YAML::Value << e.depth_latitude_deg
-      << YAML::Key << "atmospheric_pressure_pa" << YAML::Value << e.depth_atmospheric_pressure_pa << YAML::Key
+  out << YAML::Key << "depth" << YAML::Value << YAML::BeginMap << YAML::Key << "device" << YAML::Value << e.depth_device
+      << YAML::Key << "baud" << YAML::Value << e.depth_baud << YAML::Key << "units_code" << YAML::Value
+      << e.depth_units_code << YAML::Key << "latitude_deg" << YAML::Value << e.depth_latitude_deg << YAML::Key
+      << "atmospheric_pressure_pa" << YAML::Value << e.depth_atmospheric_pressure_pa << YAML::Key
       << "reading_is_absolute" << YAML::Value << e.depth_reading_is_absolute << YAML::EndMap;
   out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap << YAML::Key << "unix_seqpacket" << YAML::Value
       << e.imu_unix_seqpacket << YAML::Key << "base_id" << YAML::Value << e.imu_base_id << YAML::EndMap;
@@ -108,7 +108,8 @@ Result<VehicleEndpoints> readEndpointsFile(const std::filesystem::path& file) {
     num("backseat", "address", e.backseat_address);
     num("backseat", "port", e.backseat_port);
     const YAML::Node control = root["control"];
-    if (control && control["socket"] && !control["socket"].IsNull()) e.control_socket = control["socket"].as<std::string>();
+    if (control && control["socket"] && !control["socket"].IsNull())
+      e.control_socket = control["socket"].as<std::string>();
   } catch (const YAML::Exception& ex) {
     return Error{file.string() + ": " + ex.what()};
   }
@@ -119,8 +120,8 @@ Result<VehicleEndpoints> readEndpointsFile(const std::filesystem::path& file) {
 }
 
 std::int64_t simStampFromSteady(const VehicleEndpoints& endpoints, std::int64_t steady_ns) {
-  return static_cast<std::int64_t>(std::llround(static_cast<double>(steady_ns - endpoints.steady_ns_at_sim_zero) *
-                                                endpoints.speedup));
+  return static_cast<std::int64_t>(
+      std::llround(static_cast<double>(steady_ns - endpoints.steady_ns_at_sim_zero) * endpoints.speedup));
 }
 
 }  // namespace vog::vehicle

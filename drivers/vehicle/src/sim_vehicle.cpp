@@ -69,7 +69,10 @@ Status SimVehicleConfig::validate() const {
 class SimVehicle::Impl final : public sim::SimulationSink {
  public:
   Impl(const sim::World& world, SimVehicleConfig config, EventHandler on_event, LocalTangentPlane ltp)
-      : world_(world), config_(std::move(config)), on_event_(std::move(on_event)), ltp_(ltp),
+      : world_(world),
+        config_(std::move(config)),
+        on_event_(std::move(on_event)),
+        ltp_(ltp),
         backseat_faults_(config_.seed ^ 0xBAC5EA7ULL) {}
 
   ~Impl() override {
@@ -106,7 +109,7 @@ class SimVehicle::Impl final : public sim::SimulationSink {
   struct Window {
     std::optional<mock::Fault> fault;  // active fault, until fault_until_ns
     std::int64_t fault_until_ns = 0;
-    bool unplugged = false;            // until replug_at_ns
+    bool unplugged = false;  // until replug_at_ns
     std::int64_t replug_at_ns = 0;
   };
 
@@ -155,16 +158,16 @@ class SimVehicle::Impl final : public sim::SimulationSink {
   // Shared state.
   mutable std::mutex mutex_;
   mutable std::condition_variable cv_;
-  bool stop_ = false;                 // guarded by mutex_
-  bool finished_ = false;             // guarded by mutex_
-  bool started_ = false;              // guarded by mutex_
-  Clock::time_point t0_{};            // set by start(), read-only afterwards
-  std::vector<ControlCommand> control_queue_;                // guarded by mutex_
-  std::vector<backseat::BackseatSentence> backseat_queue_;   // guarded by mutex_
-  VehicleSnapshot snapshot_;                                 // guarded by mutex_
-  std::deque<sim::VehicleState> truth_history_;              // guarded by mutex_
+  bool stop_ = false;                                                       // guarded by mutex_
+  bool finished_ = false;                                                   // guarded by mutex_
+  bool started_ = false;                                                    // guarded by mutex_
+  Clock::time_point t0_{};                                                  // set by start(), read-only afterwards
+  std::vector<ControlCommand> control_queue_;                               // guarded by mutex_
+  std::vector<backseat::BackseatSentence> backseat_queue_;                  // guarded by mutex_
+  VehicleSnapshot snapshot_;                                                // guarded by mutex_
+  std::deque<sim::VehicleState> truth_history_;                             // guarded by mutex_
   std::deque<std::pair<std::uint32_t, geometry::RangeScan>> scan_history_;  // guarded by mutex_
-  std::deque<StampedDepth> depth_history_;                   // guarded by mutex_
+  std::deque<StampedDepth> depth_history_;                                  // guarded by mutex_
   std::atomic<std::int64_t> stamp_ns_{0};  // newest step's stamp, published after its truth
   std::thread thread_;
 };
@@ -241,7 +244,8 @@ void SimVehicle::Impl::run() {
   for (;;) {
     const std::int64_t next_ns = sim.stampNs() + sim.stepNs();
     if (duration_ns > 0 && next_ns > duration_ns) break;
-    const auto due = t0_ + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(next_ns) / config_.speedup));
+    const auto due =
+        t0_ + std::chrono::nanoseconds(static_cast<std::int64_t>(static_cast<double>(next_ns) / config_.speedup));
     std::vector<ControlCommand> commands;
     std::vector<backseat::BackseatSentence> inbound;
     {
@@ -378,13 +382,14 @@ backseat::TimeOfDay SimVehicle::Impl::timeOfDay(std::int64_t stamp_ns) const {
 void SimVehicle::Impl::sendBackseat(const backseat::BackseatSentence& s) {
   const std::string line = backseat::encodeBackseat(s);
   armFault(Device::kBackseat, backseat_faults_);
-  auto out = backseat_faults_.apply(std::vector<std::uint8_t>(line.begin(), line.end()), [](std::vector<std::uint8_t>& m) {
-    // "*hh\r\n": the first checksum digit becomes another valid hex digit.
-    if (m.size() >= 5) {
-      std::uint8_t& c = m[m.size() - 4];
-      c = c == '0' ? '1' : '0';
-    }
-  });
+  auto out =
+      backseat_faults_.apply(std::vector<std::uint8_t>(line.begin(), line.end()), [](std::vector<std::uint8_t>& m) {
+        // "*hh\r\n": the first checksum digit becomes another valid hex digit.
+        if (m.size() >= 5) {
+          std::uint8_t& c = m[m.size() - 4];
+          c = c == '0' ? '1' : '0';
+        }
+      });
   backseat_->send({std::move(out)});
 }
 
@@ -520,8 +525,9 @@ Result<std::string> SimVehicle::Impl::control(const std::string& line) {
   if (c->kind == ControlCommand::Kind::kStatus) {
     const VehicleSnapshot s = snapshot();
     const auto& p = s.truth.xyz_world;
-    std::string out = "ok t_s=" + fmt(static_cast<double>(s.stamp_ns) * 1e-9, 2) + " x=" + fmt(p.x()) + " y=" +
-                      fmt(p.y()) + " z=" + fmt(p.z()) + " yaw_deg=" + fmt(s.truth.yaw_rad * 180.0 / std::numbers::pi, 2) +
+    std::string out = "ok t_s=" + fmt(static_cast<double>(s.stamp_ns) * 1e-9, 2) + " x=" + fmt(p.x()) +
+                      " y=" + fmt(p.y()) + " z=" + fmt(p.z()) +
+                      " yaw_deg=" + fmt(s.truth.yaw_rad * 180.0 / std::numbers::pi, 2) +
                       " commands=" + std::to_string(s.commands_accepted) + "/" +
                       std::to_string(s.commands_accepted + s.commands_rejected) + " scans=" + std::to_string(s.scans) +
                       " max_lag_ms=" + fmt(s.max_lag_ms, 1);
@@ -568,7 +574,8 @@ void SimVehicle::Impl::execute(const ControlCommand& c, std::int64_t now_ns) {
   if (c.kind == ControlCommand::Kind::kFault) {
     w.fault = c.fault;
     w.fault_until_ns = until;
-    event(std::string("fault ") + faultName(c.fault) + " on " + toString(c.device) + " for " + fmt(c.seconds, 2) + " s");
+    event(std::string("fault ") + faultName(c.fault) + " on " + toString(c.device) + " for " + fmt(c.seconds, 2) +
+          " s");
     return;
   }
   if (!w.unplugged) {
@@ -648,10 +655,10 @@ Result<sim::VehicleState> SimVehicle::Impl::truthAt(std::int64_t stamp_ns) const
   const std::int64_t last = truth_history_.back().stamp_ns;
   const std::int64_t step = sim_->stepNs();
   if (stamp_ns < first - step || stamp_ns > last + step)
-    return Error{"stamp " + std::to_string(stamp_ns) + " ns is outside the kept truth [" + std::to_string(first) + ", " +
-                 std::to_string(last) + "] ns"};
+    return Error{"stamp " + std::to_string(stamp_ns) + " ns is outside the kept truth [" + std::to_string(first) +
+                 ", " + std::to_string(last) + "] ns"};
   const std::int64_t k = std::clamp<std::int64_t>((stamp_ns - first + step / 2) / step, 0,
-                                                   static_cast<std::int64_t>(truth_history_.size()) - 1);
+                                                  static_cast<std::int64_t>(truth_history_.size()) - 1);
   return truth_history_[static_cast<std::size_t>(k)];
 }
 

@@ -154,10 +154,10 @@ TEST_F(ApiServerTest, OperatorCommandsDriveTheMissionAfterAuthentication) {
 
   using K = MissionCommand::Kind;
   const std::vector<std::pair<K, MissionState>> steps = {{K::kStart, MissionState::kExploring},
-                                                          {K::kPause, MissionState::kPaused},
-                                                          {K::kResume, MissionState::kExploring},
-                                                          {K::kReturnHome, MissionState::kReturning},
-                                                          {K::kAbort, MissionState::kAborted}};
+                                                         {K::kPause, MissionState::kPaused},
+                                                         {K::kResume, MissionState::kExploring},
+                                                         {K::kReturnHome, MissionState::kReturning},
+                                                         {K::kAbort, MissionState::kAborted}};
   for (const auto& [kind, state] : steps) {
     MissionCommand cmd;
     cmd.kind = kind;
@@ -275,7 +275,8 @@ TEST_F(ApiServerTest, AuthenticationSucceedsOnlyWithTheSecretAndEachNonceOnce) {
   const std::string client_nonce(32, '\x5a');
   v1::Envelope answer;
   answer.mutable_challenge_response()->set_client_nonce(client_nonce);
-  answer.mutable_challenge_response()->set_mac(std::string(asBytes(clientMac(kOperatorSecret, server_nonce, client_nonce))));
+  answer.mutable_challenge_response()->set_mac(
+      std::string(asBytes(clientMac(kOperatorSecret, server_nonce, client_nonce))));
   (void)right->send(answer).value();
   const v1::Envelope ok = right->receive(5s).value();
   ASSERT_TRUE(ok.has_auth_result());

@@ -26,8 +26,7 @@ TEST(Auth, ClientMacCoversServerNonceClientNonceAndLabelInThatOrder) {
   const std::string sn(32, '\x01');
   const std::string cn(32, '\x02');
   EXPECT_EQ(toHex(asBytes(clientMac(secret, sn, cn))), toHex(asBytes(hmacSha256(secret, sn + cn + "vog.v1"))));
-  EXPECT_EQ(toHex(asBytes(serverProof(secret, sn, cn))),
-            toHex(asBytes(hmacSha256(secret, cn + sn + "vog.v1 server"))));
+  EXPECT_EQ(toHex(asBytes(serverProof(secret, sn, cn))), toHex(asBytes(hmacSha256(secret, cn + sn + "vog.v1 server"))));
   // Swapping the nonces, changing the secret or a single bit changes the MAC.
   EXPECT_NE(clientMac(secret, sn, cn), clientMac(secret, cn, sn));
   EXPECT_NE(clientMac(secret, sn, cn), clientMac(secret + "!", sn, cn));

@@ -18,8 +18,8 @@ class FakeBackend final : public ApiBackend {
   explicit FakeBackend(int n_submaps = 6, std::size_t n_initial = 3) {
     const auto built = map::test_fixtures::buildSubmaps(config_, n_submaps, 15, 7, 4.0);
     for (std::size_t i = 0; i < built.size(); ++i) {
-      entries_.push_back({static_cast<map::SubmapId>(i), built[i].grid, built[i].T_world_submap,
-                          built[i].T_world_submap.inverse()});
+      entries_.push_back(
+          {static_cast<map::SubmapId>(i), built[i].grid, built[i].T_world_submap, built[i].T_world_submap.inverse()});
     }
     merged_ = map::MergedMap::create(config_).value();
     for (std::size_t i = 0; i < n_initial && i < entries_.size(); ++i) addSubmap(i);
@@ -134,15 +134,15 @@ class FakeBackend final : public ApiBackend {
  private:
   map::GridConfig config_;
   mutable std::mutex mutex_;
-  std::vector<map::SubmapEntry> entries_;                   // guarded by mutex_
-  std::unique_ptr<map::MergedMap> merged_;                  // guarded by mutex_
-  std::shared_ptr<const map::MergedMap> snapshot_;          // guarded by mutex_
-  std::vector<std::size_t> merged_ids_;                     // guarded by mutex_
-  MissionState state_ = MissionState::kIdle;                // guarded by mutex_
-  MissionState paused_from_ = MissionState::kExploring;     // guarded by mutex_
-  ExplorationBox box_;                                      // guarded by mutex_
-  bool has_box_ = false;                                    // guarded by mutex_
-  std::vector<MissionCommand> commands_;                    // guarded by mutex_
+  std::vector<map::SubmapEntry> entries_;                // guarded by mutex_
+  std::unique_ptr<map::MergedMap> merged_;               // guarded by mutex_
+  std::shared_ptr<const map::MergedMap> snapshot_;       // guarded by mutex_
+  std::vector<std::size_t> merged_ids_;                  // guarded by mutex_
+  MissionState state_ = MissionState::kIdle;             // guarded by mutex_
+  MissionState paused_from_ = MissionState::kExploring;  // guarded by mutex_
+  ExplorationBox box_;                                   // guarded by mutex_
+  bool has_box_ = false;                                 // guarded by mutex_
+  std::vector<MissionCommand> commands_;                 // guarded by mutex_
   std::shared_ptr<Cloud> cloud_ = std::make_shared<Cloud>();
 };
 

@@ -25,8 +25,8 @@ TEST(MapDelta, AMirrorFollowsTheMapThroughDeltas) {
   const auto built = map::test_fixtures::buildSubmaps(config, 5, 20, 2, 4.0);
   std::vector<map::SubmapEntry> entries;
   for (std::size_t i = 0; i < built.size(); ++i) {
-    entries.push_back({static_cast<map::SubmapId>(i), built[i].grid, built[i].T_world_submap,
-                       built[i].T_world_submap.inverse()});
+    entries.push_back(
+        {static_cast<map::SubmapId>(i), built[i].grid, built[i].T_world_submap, built[i].T_world_submap.inverse()});
   }
   auto merged = map::MergedMap::create(config).value();
   for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(merged->add(entries[i]).ok());

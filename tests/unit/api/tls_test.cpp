@@ -40,8 +40,8 @@ Certificate makeSelfSigned(const std::filesystem::path& dir, const std::string& 
   X509_gmtime_adj(X509_getm_notAfter(x), 24 * 3600);
   X509_set_pubkey(x, key);
   X509_NAME* subject = X509_get_subject_name(x);
-  X509_NAME_add_entry_by_txt(subject, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>(common_name.c_str()), -1,
-                             -1, 0);
+  X509_NAME_add_entry_by_txt(subject, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>(common_name.c_str()),
+                             -1, -1, 0);
   X509_set_issuer_name(x, subject);
   X509V3_CTX ctx;
   X509V3_set_ctx_nodb(&ctx);
@@ -88,7 +88,8 @@ class TlsTest : public ::testing::Test {
     asio::post(io_, [this] { io_.stop(); });
     thread_.join();
   }
-  Result<std::unique_ptr<ApiClient>> connect(bool tls, const std::filesystem::path& ca, const std::string& host = "127.0.0.1") {
+  Result<std::unique_ptr<ApiClient>> connect(bool tls, const std::filesystem::path& ca,
+                                             const std::string& host = "127.0.0.1") {
     client::ClientConfig c;
     c.timeout = 3s;
     c.tls.enabled = tls;
@@ -142,8 +143,10 @@ TEST_F(TlsTest, PlainClientsAndUntrustedServersAreRefused) {
   const Certificate other = makeSelfSigned(dir_.path(), "other", "not-vogd");
   auto untrusted = connect(true, other.certificate_file);
   ASSERT_FALSE(untrusted.ok());
-  EXPECT_NE(untrusted.error().message.find("TLS handshake with 127.0.0.1"), std::string::npos) << untrusted.error().message;
-  EXPECT_NE(untrusted.error().message.find("certificate verify failed"), std::string::npos) << untrusted.error().message;
+  EXPECT_NE(untrusted.error().message.find("TLS handshake with 127.0.0.1"), std::string::npos)
+      << untrusted.error().message;
+  EXPECT_NE(untrusted.error().message.find("certificate verify failed"), std::string::npos)
+      << untrusted.error().message;
   // Nor a certificate for another name (the same certificate, asked for by another host name).
   auto misnamed = connect(true, server_cert_.certificate_file, "127.0.0.2");
   EXPECT_FALSE(misnamed.ok());

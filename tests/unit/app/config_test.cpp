@@ -119,7 +119,8 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(na.dvl_velocity_sigma_mps, nb.dvl_velocity_sigma_mps);
   EXPECT_NEAR(na.heading_sigma_rad, nb.heading_sigma_rad, 1e-5);
   EXPECT_EQ(na.heading_drift_rad2_per_s, nb.heading_drift_rad2_per_s);
-  EXPECT_EQ(a.devices.feed.range_extraction.threshold_above_noise, b.devices.feed.range_extraction.threshold_above_noise);
+  EXPECT_EQ(a.devices.feed.range_extraction.threshold_above_noise,
+            b.devices.feed.range_extraction.threshold_above_noise);
   EXPECT_EQ(a.devices.feed.range_extraction.min_range_m, b.devices.feed.range_extraction.min_range_m);
   const DevicesSection& da = a.devices;
   const DevicesSection& db = b.devices;
@@ -150,7 +151,8 @@ TEST(VogdConfig, UnknownKeyIsRefusedWithItsLine) {
   const std::string e = errorOf("source: devices\nmapping:\n  grid:\n    resolution: 0.1\n");
   EXPECT_NE(e.find("test.yaml:4: mapping.grid.resolution: unknown key"), std::string::npos) << e;
   EXPECT_NE(e.find("resolution_m"), std::string::npos) << e;  // lists what is allowed
-  EXPECT_NE(errorOf("source: devices\nplaner: {lambda: 1}\n").find("test.yaml:2: planer: unknown key"), std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nplaner: {lambda: 1}\n").find("test.yaml:2: planer: unknown key"),
+            std::string::npos);
 }
 
 TEST(VogdConfig, OutOfRangeValueNamesTheRange) {
@@ -171,9 +173,11 @@ TEST(VogdConfig, WrongTypesAndSyntaxAreRefused) {
   EXPECT_NE(errorOf("source: devices\nplanner: {n_max: 2.5}\n").find("must be an integer"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping: {loop_closures: {enabled: maybe}}\n").find("must be true or false"),
             std::string::npos);
-  EXPECT_NE(errorOf("source: devices\nmission: {box_min_m: [1, 2]}\n").find("mission.box_min_m: must be a list of 3 numbers"),
+  EXPECT_NE(
+      errorOf("source: devices\nmission: {box_min_m: [1, 2]}\n").find("mission.box_min_m: must be a list of 3 numbers"),
+      std::string::npos);
+  EXPECT_NE(errorOf("source: satellite\n").find("source: must be one of sim, devices, got 'satellite'"),
             std::string::npos);
-  EXPECT_NE(errorOf("source: satellite\n").find("source: must be one of sim, devices, got 'satellite'"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping: [1, 2]\n").find("mapping: must be a mapping"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping:\n  grid: {resolution_m: 0.1\n").find("test.yaml:"), std::string::npos);
   EXPECT_NE(errorOf("- 1\n- 2\n").find("must be a mapping of sections"), std::string::npos);

@@ -27,8 +27,8 @@ OdometrySample sample(std::int64_t stamp_ns, const Pose3& T) {
 }
 
 void expectPosesNear(const Pose3& a, const Pose3& b, double tol = 1e-9) {
-  EXPECT_LT((a.translation() - b.translation()).norm(), tol) << a.translation().transpose() << " vs "
-                                                             << b.translation().transpose();
+  EXPECT_LT((a.translation() - b.translation()).norm(), tol)
+      << a.translation().transpose() << " vs " << b.translation().transpose();
   EXPECT_LT((a.linear() - b.linear()).norm(), tol);
 }
 
@@ -99,8 +99,10 @@ TEST(Watchdog, AThreadThatStopsBeatingIsReportedOnceAndAliveAgainWhenItBeats) {
   std::atomic<std::uint64_t> a{0}, b{0};
   const Clock::time_point t0{};
   Watchdog w(std::chrono::seconds(10));
-  w.add("mapping", [&] { return a.load(); }, t0);
-  w.add("planning", [&] { return b.load(); }, t0);
+  w.add(
+      "mapping", [&] { return a.load(); }, t0);
+  w.add(
+      "planning", [&] { return b.load(); }, t0);
   // Both beat for 30 s.
   for (int s = 1; s <= 30; ++s) {
     ++a;

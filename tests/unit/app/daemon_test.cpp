@@ -23,11 +23,15 @@ VogdConfig simConfig(const test::TempDir& dir, int max_submaps) {
   const std::filesystem::path secret = dir.path() / "secret";
   std::ofstream(secret) << kSecret << "\n";
   std::filesystem::permissions(secret, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
-  const std::string text = "source: sim\n"
-                           "sim:\n  scene: scenes/pilings.yaml\n  seed: 3\n  speedup: 0\n"
-                           "mission:\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n"
-                           "  start_on_launch: true\n  max_submaps: " + std::to_string(max_submaps) + "\n"
-                           "api:\n  port: 0\n  secret_file: " + secret.string() + "\n";
+  const std::string text =
+      "source: sim\n"
+      "sim:\n  scene: scenes/pilings.yaml\n  seed: 3\n  speedup: 0\n"
+      "mission:\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n"
+      "  start_on_launch: true\n  max_submaps: " +
+      std::to_string(max_submaps) +
+      "\n"
+      "api:\n  port: 0\n  secret_file: " +
+      secret.string() + "\n";
   return parseVogdConfig(text, "test.yaml", test::sourceDir() / "config").value();
 }
 
@@ -97,9 +101,12 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
     const std::uint16_t port = run.port(*options.port_file);
     ASSERT_NE(port, 0);
     auto c = client::ApiClient::connect("127.0.0.1", port).value();
-    const api::StatusReport done = waitFor(*c, [](const api::StatusReport& s) {
-      return s.mission_state == api::MissionState::kComplete || s.mission_state == api::MissionState::kAborted;
-    }, 120.0);
+    const api::StatusReport done = waitFor(
+        *c,
+        [](const api::StatusReport& s) {
+          return s.mission_state == api::MissionState::kComplete || s.mission_state == api::MissionState::kAborted;
+        },
+        120.0);
     ASSERT_EQ(done.mission_state, api::MissionState::kComplete) << "the budget of 4 submaps ends the mission at home";
     EXPECT_GE(done.n_submaps, 4u);
     ASSERT_EQ(done.devices.size(), 1u);
@@ -111,12 +118,15 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
     // The submap list and the status agree once the mapping thread has worked through the scans taken
     // before the end (the last submap can close just after the mission reports complete).
     std::size_t listed = 0;
-    const api::StatusReport settled = waitFor(*c, [&](const api::StatusReport& s) {
-      auto submaps = c->submaps();
-      EXPECT_TRUE(submaps.ok());
-      listed = submaps.ok() ? submaps->size() : 0;
-      return listed == s.n_submaps;
-    }, 30.0);
+    const api::StatusReport settled = waitFor(
+        *c,
+        [&](const api::StatusReport& s) {
+          auto submaps = c->submaps();
+          EXPECT_TRUE(submaps.ok());
+          listed = submaps.ok() ? submaps->size() : 0;
+          return listed == s.n_submaps;
+        },
+        30.0);
     EXPECT_EQ(listed, settled.n_submaps);
     EXPECT_GE(settled.n_submaps, done.n_submaps);
 
@@ -127,11 +137,13 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
     ASSERT_EQ(c->authenticate(kSecret).value(), api::Role::kOperator);
     auto refused = c->command(pause);
     ASSERT_FALSE(refused.ok());
-    EXPECT_NE(refused.error().message.find("pause refused while complete"), std::string::npos) << refused.error().message;
+    EXPECT_NE(refused.error().message.find("pause refused while complete"), std::string::npos)
+        << refused.error().message;
     api::MissionCommand start;
     start.kind = api::MissionCommand::Kind::kStart;
     EXPECT_EQ(c->command(start).value(), api::MissionState::kExploring);  // a new exploration, budget spent
-    waitFor(*c, [](const api::StatusReport& s) { return s.mission_state == api::MissionState::kComplete; }, 60.0);
+    waitFor(
+        *c, [](const api::StatusReport& s) { return s.mission_state == api::MissionState::kComplete; }, 60.0);
     submaps_before_stop = c->status().value().n_submaps;
     const double stop_s = run.stop();
     EXPECT_TRUE(run.result.ok()) << run.result.error().message;

@@ -158,7 +158,8 @@ TEST(DeviceFeed, ScansAreMappedAtTheAlignedDeadReckoningPose) {
 
   // Odometry follows the DVL from the alignment on, in stamp order.
   ASSERT_GT(run.odometry.size(), 90u);
-  for (std::size_t i = 1; i < run.odometry.size(); ++i) EXPECT_GE(run.odometry[i].stamp_ns, run.odometry[i - 1].stamp_ns);
+  for (std::size_t i = 1; i < run.odometry.size(); ++i)
+    EXPECT_GE(run.odometry[i].stamp_ns, run.odometry[i - 1].stamp_ns);
   // Garbage before an ensemble is skipped and decoding goes on.
   EXPECT_GE(feed->droppedInput(DeviceId::kDvl), 64u);
   EXPECT_EQ(feed->deadReckoning(20'002 * kMs).dvl_used, 101u);
@@ -174,7 +175,9 @@ TEST(DeviceFeed, TheSameChunksGiveTheSameScansBitForBit) {
   ASSERT_EQ(ra.scans.size(), rb.scans.size());
   for (std::size_t i = 0; i < ra.scans.size(); ++i) {
     EXPECT_EQ(ra.scans[i].scan.stamp_ns, rb.scans[i].scan.stamp_ns);
-    EXPECT_EQ(std::memcmp(ra.scans[i].T_world_vehicle_odom.data(), rb.scans[i].T_world_vehicle_odom.data(), 16 * sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(ra.scans[i].T_world_vehicle_odom.data(), rb.scans[i].T_world_vehicle_odom.data(),
+                          16 * sizeof(double)),
+              0);
     EXPECT_EQ(ra.scans[i].scan.range_m, rb.scans[i].scan.range_m);
   }
 }
@@ -208,7 +211,8 @@ TEST(DeviceFeed, DamagedInputIsCountedAndNothingIsMappedFromIt) {
             sentence("BFNVG,000000.00,4200.000000,N,07100.000000,W,0,3.00,nan,90.00,0.00,0.00,000000.00"), out);
   EXPECT_FALSE(out.vehicle_navigation.has_value());  // the decoder drops it as malformed
   EXPECT_EQ(feed.droppedInput(DeviceId::kBackseat), 1u);
-  std::vector<std::uint8_t> bad = sentence("BFNVG,000000.00,4200.000000,N,07100.000000,W,0,3.00,2.00,90.00,0.00,0.00,000000.00");
+  std::vector<std::uint8_t> bad =
+      sentence("BFNVG,000000.00,4200.000000,N,07100.000000,W,0,3.00,2.00,90.00,0.00,0.00,000000.00");
   bad[bad.size() - 3] ^= 0x01;  // checksum digit
   feed.feed(DeviceId::kBackseat, 2 * kMs, bad, out);
   EXPECT_FALSE(out.vehicle_navigation.has_value());
@@ -221,7 +225,8 @@ TEST(DeviceFeed, DamagedInputIsCountedAndNothingIsMappedFromIt) {
   EXPECT_EQ(feed.counters(DeviceId::kSonar).rejected, 1u);
 
   mock::SimWireConfig wire;
-  std::vector<std::uint8_t> pd0 = dvl::encodePd0(mock::toPd0Ensemble({0, true, Eigen::Vector3d(0.2, 0, 0), 3.0}, 1, wire).value());
+  std::vector<std::uint8_t> pd0 =
+      dvl::encodePd0(mock::toPd0Ensemble({0, true, Eigen::Vector3d(0.2, 0, 0), 3.0}, 1, wire).value());
   pd0[20] ^= 0xFF;
   feed.feed(DeviceId::kDvl, 4 * kMs, pd0, out);
   EXPECT_EQ(feed.counters(DeviceId::kDvl).messages, 0u);

@@ -82,7 +82,8 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
   vog::test::TempDir dir("vogd-process");
   const fs::path config = dir.path() / "vogd.yaml";
   std::ofstream(config) << "source: sim\n"
-                           "sim:\n  scene: " << (vog::test::sourceDir() / "config/scenes/pilings.yaml").string()
+                           "sim:\n  scene: "
+                        << (vog::test::sourceDir() / "config/scenes/pilings.yaml").string()
                         << "\n  seed: 2\n  speedup: 0\n"
                            "mission:\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n  start_on_launch: true\n"
                            "  max_submaps: 60\n"
@@ -90,8 +91,8 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
   const fs::path mission = dir.path() / "mission", port_file = dir.path() / "port", log = dir.path() / "vogd.log";
   NotifySocket notify(dir.path() / "notify.sock");
   ASSERT_TRUE(notify.bound());
-  const std::vector<std::string> args = {VOGD_EXECUTABLE, "--config", config.string(), "--mission-dir", mission.string(),
-                                         "--port-file", port_file.string()};
+  const std::vector<std::string> args = {VOGD_EXECUTABLE,  "--config",    config.string(),   "--mission-dir",
+                                         mission.string(), "--port-file", port_file.string()};
   const std::vector<std::string> env = {"NOTIFY_SOCKET=" + (dir.path() / "notify.sock").string(),
                                         "WATCHDOG_USEC=2000000"};
 

@@ -31,10 +31,12 @@ struct Vehicle {
     }
   }
   void ack(std::uint32_t id, bool accepted, const std::string& reason = "") {
-    follower.onAck({now, {}, "BPGHP", {}, id, accepted ? backseat::AckStatus::kAccepted : backseat::AckStatus::kFailed, reason});
+    follower.onAck(
+        {now, {}, "BPGHP", {}, id, accepted ? backseat::AckStatus::kAccepted : backseat::AckStatus::kFailed, reason});
   }
   // The vehicle's navigation at (x, y, z, yaw) with a speed; odometry = navigation + odom_shift.
-  void at(const Eigen::Vector3d& p, double yaw, double speed, const Eigen::Vector3d& odom_shift = Eigen::Vector3d::Zero()) {
+  void at(const Eigen::Vector3d& p, double yaw, double speed,
+          const Eigen::Vector3d& odom_shift = Eigen::Vector3d::Zero()) {
     VehicleNavigation n;
     n.stamp_ns = now;
     n.T_world_vehicle = geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0, 0, yaw);
@@ -115,7 +117,8 @@ TEST(WaypointFollower, RefusedOrUnacknowledgedCommandsDropTheListAndSayWhy) {
   EXPECT_EQ(v.commands.size(), 4u);  // the first send and two resends, same id
   EXPECT_EQ(v.commands[3].id, v.commands[1].id);
   EXPECT_TRUE(v.follower.idle());
-  EXPECT_NE(v.follower.lastError().find("no acknowledgement after 3 attempts"), std::string::npos) << v.follower.lastError();
+  EXPECT_NE(v.follower.lastError().find("no acknowledgement after 3 attempts"), std::string::npos)
+      << v.follower.lastError();
 }
 
 TEST(WaypointFollower, AVehicleThatStopsShortIsReportedAsObstructed) {

@@ -106,7 +106,9 @@ TEST(ChunkSequence, CloudChunksInOrderAssembleTheCloud) {
 }
 
 TEST(ChunkSequence, OutOfOrderChangedCountOrForeignMessagesAreErrors) {
-  EXPECT_EQ(cloudError([](std::uint64_t id) { return std::vector{cloudChunk(id, 1, 2, 3, {1, 2, 3})}; }),
+  EXPECT_EQ(cloudError([](std::uint64_t id) {
+              return std::vector{cloudChunk(id, 1, 2, 3, {1, 2, 3})};
+            }),
             "cloud: chunk 1 of 2 arrived, expected chunk 0");
   EXPECT_EQ(cloudError([](std::uint64_t id) {
               return std::vector{cloudChunk(id, 0, 2, 2, {1, 2, 3}), cloudChunk(id, 1, 3, 2, {4, 5, 6})};
@@ -117,7 +119,9 @@ TEST(ChunkSequence, OutOfOrderChangedCountOrForeignMessagesAreErrors) {
   EXPECT_EQ(cloudError([](std::uint64_t id) { return std::vector{mapChunk(id, 0, 1)}; }),
             "cloud: the server answered with another message");
   // The per-transfer check still runs inside the shared loop.
-  EXPECT_EQ(cloudError([](std::uint64_t id) { return std::vector{cloudChunk(id, 0, 1, 1, {1, 2})}; }),
+  EXPECT_EQ(cloudError([](std::uint64_t id) {
+              return std::vector{cloudChunk(id, 0, 1, 1, {1, 2})};
+            }),
             "cloud: chunk 0 has 2 coordinates and 0 normal components");
 
   ScriptedServer server([](std::uint64_t id) { return std::vector{mapChunk(id, 0, 2), mapChunk(id, 0, 2)}; });

@@ -138,8 +138,8 @@ inline DecodedPly decodePly(const std::string& bytes) {
   const std::size_t data = end + std::strlen("end_header\n");
   const std::size_t stride = 4 * d.properties.size();
   if (bytes.size() != data + n * stride) {
-    d.error = "body is " + std::to_string(bytes.size() - data) + " bytes, header promises " +
-              std::to_string(n * stride);
+    d.error =
+        "body is " + std::to_string(bytes.size() - data) + " bytes, header promises " + std::to_string(n * stride);
     return d;
   }
   for (std::size_t i = 0; i < n; ++i) {
@@ -177,7 +177,9 @@ inline std::optional<JsonObject> parseJsonObject(const std::string& text) {
         if (i >= text.size()) return std::nullopt;
         const char e = text[i++];
         switch (e) {
-          case '"': case '\\': case '/': c = e; break;
+          case '"':
+          case '\\':
+          case '/': c = e; break;
           case 'n': c = '\n'; break;
           case 't': c = '\t'; break;
           case 'r': c = '\r'; break;

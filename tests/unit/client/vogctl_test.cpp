@@ -104,9 +104,9 @@ class RecordingBackend final : public api::ApiBackend {
   std::shared_ptr<const map::MergedMap> snapshot_;
   std::vector<api::SubmapInfo> submaps_;
   mutable std::mutex mutex_;
-  std::shared_ptr<const api::Cloud> cloud_;               // guarded by mutex_
-  api::MissionState state_ = api::MissionState::kIdle;     // guarded by mutex_
-  std::vector<api::MissionCommand> commands_;             // guarded by mutex_
+  std::shared_ptr<const api::Cloud> cloud_;             // guarded by mutex_
+  api::MissionState state_ = api::MissionState::kIdle;  // guarded by mutex_
+  std::vector<api::MissionCommand> commands_;           // guarded by mutex_
 };
 
 // The outcome of one vogctl invocation.
@@ -124,7 +124,8 @@ class VogctlTest : public ::testing::Test {
     config.dispatch.cloud_points_per_chunk = 1000;
     config.dispatch.map_blocks_per_chunk = 16;
     config.close_timeout = 200ms;
-    server_ = api::ApiServer::create(io_, backend_, config, nullptr, std::make_unique<api::SeededNonceSource>(3)).value();
+    server_ =
+        api::ApiServer::create(io_, backend_, config, nullptr, std::make_unique<api::SeededNonceSource>(3)).value();
     port_ = server_->listen("127.0.0.1", 0).value();
     thread_ = std::thread([this] { io_.run(); });
     secret_file_ = (dir_.path() / "secret").string();
@@ -301,7 +302,7 @@ TEST_F(VogctlTest, TopViewAtLowerResolutionShowsTheHighestColumnInEachPixel) {
   const double z_min = number(lines->front(), "z_min_m"), z_max = number(lines->front(), "z_max_m");
   const map::MergedMap& m = backend_.map();
   const double res = m.resolution();
-  std::map<std::pair<int, int>, int> top;  // pixel -> highest occupied z key
+  std::map<std::pair<int, int>, int> top;                                   // pixel -> highest occupied z key
   std::map<std::pair<int, int>, std::set<std::pair<int, int>>> columns_in;  // pixel -> occupied columns
   m.forEachKnown([&](const map::VoxelKey& k, const map::VoxelValue& v) {
     if (v.status != map::Occupancy::kOccupied) return;

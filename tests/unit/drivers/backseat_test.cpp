@@ -158,9 +158,8 @@ TEST(Backseat, GoToPositionCarriesAnOptionalHeadingAndMillimetrePositions) {
     }
   }
   // A heading outside [0, 360) is named.
-  auto bad = BackseatCodec{}.decode(asBytes(encodeBackseat(BackseatOther{"BPGHP", {"000140.00", "9", "4200.000741", "N",
-                                                                                   "07059.999259", "W", "2.50", "0.25",
-                                                                                   "360.5"}})));
+  auto bad = BackseatCodec{}.decode(asBytes(encodeBackseat(
+      BackseatOther{"BPGHP", {"000140.00", "9", "4200.000741", "N", "07059.999259", "W", "2.50", "0.25", "360.5"}})));
   ASSERT_TRUE(bad.isBad());
   EXPECT_NE(bad.reason().find("heading"), std::string::npos) << bad.reason();
 }
@@ -176,7 +175,8 @@ TEST(LocalTangentPlaneTest, DegreeLengthsMatchWgs84TablesAndRoundTrip) {
   const double lon_m = 111'412.84 * std::cos(phi) - 93.5 * std::cos(3 * phi) + 0.118 * std::cos(5 * phi);
   EXPECT_NEAR(ltp->metresPerDegreeLatitude(), lat_m, 1.0);
   EXPECT_NEAR(ltp->metresPerDegreeLongitude(), lon_m, 1.0);
-  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0, 0), Eigen::Vector2d(-5.25, 3.5), Eigen::Vector2d(812.0, -9000.0)}) {
+  for (const Eigen::Vector2d& xy :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(-5.25, 3.5), Eigen::Vector2d(812.0, -9000.0)}) {
     const GeoPoint g = ltp->toGeo(xy);
     EXPECT_LT((ltp->toLocal(g) - xy).norm(), 1e-6);
   }

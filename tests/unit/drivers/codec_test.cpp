@@ -39,7 +39,7 @@ TEST(StreamDecoder, DeliversFramesSplitAcrossFeedsAndCountsDrops) {
   EXPECT_EQ(d.stats().bad_checksum, 1u);
   EXPECT_EQ(d.stats().malformed, 1u);
   EXPECT_EQ(d.stats().garbage_bytes, 6u);  // "xx", ">" after "<34!", "x" after the malformed "<", "yy"
-  EXPECT_EQ(d.pendingBytes(), 2u);                   // "<6" waits for its '>'
+  EXPECT_EQ(d.pendingBytes(), 2u);         // "<6" waits for its '>'
 }
 
 TEST(StreamDecoder, BufferLimitDropsOldestBytes) {

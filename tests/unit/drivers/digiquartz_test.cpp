@@ -46,7 +46,7 @@ TEST(Digiquartz, RoundTripAndResyncAfterGarbage) {
   stream += encodePressureReply(0, 1, 101.325, 4);
   stream += "*00011x.2\r\n";  // damaged reply: malformed, dropped
   stream += encodeCommand(1, 0, "P3");
-  stream += "*0001";          // a reply cut off by a reset, then a full one
+  stream += "*0001";  // a reply cut off by a reset, then a full one
   stream += encodePressureReply(0, 1, -0.0012, 4);
   const auto d = codec::decodeAll<DigiquartzCodec>(asBytes(stream));
   ASSERT_EQ(d.frames.size(), 3u);

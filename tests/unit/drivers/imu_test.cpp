@@ -112,7 +112,8 @@ TEST(RawImus, RoundTripAndCrcProtectsEveryByte) {
   const RawImusConfig cfg;
   EXPECT_NEAR(static_cast<double>(r.frame().stamp_ns - in.stamp_ns), 0.0, 1000.0);
   EXPECT_EQ(r.frame().status, 0x77u);
-  EXPECT_LT((r.frame().delta_velocity_mps - in.delta_velocity_mps).cwiseAbs().maxCoeff(), cfg.accel_scale_mps_per_count);
+  EXPECT_LT((r.frame().delta_velocity_mps - in.delta_velocity_mps).cwiseAbs().maxCoeff(),
+            cfg.accel_scale_mps_per_count);
   EXPECT_LT((*r.frame().delta_angle_rad - *in.delta_angle_rad).cwiseAbs().maxCoeff(), cfg.gyro_scale_rad_per_count);
   EXPECT_DOUBLE_EQ(r.frame().dt_s, 0.01);
   for (std::size_t i = 3; i < bytes.size(); ++i) {

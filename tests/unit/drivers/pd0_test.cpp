@@ -43,9 +43,9 @@ TEST(Pd0, RealSampleOneMatchesHandReading) {
   EXPECT_EQ(e.variable.clock.minute, 12);
   EXPECT_EQ(e.variable.clock.second, 53);
   EXPECT_EQ(e.variable.clock.hundredths, 92);
-  EXPECT_DOUBLE_EQ(e.variable.heading_deg, 52.87);   // 0x14a7 = 5287
-  EXPECT_DOUBLE_EQ(e.variable.pitch_deg, -44.11);    // 0xeec5 = -4411
-  EXPECT_DOUBLE_EQ(e.variable.roll_deg, -44.61);     // 0xee93 = -4461
+  EXPECT_DOUBLE_EQ(e.variable.heading_deg, 52.87);       // 0x14a7 = 5287
+  EXPECT_DOUBLE_EQ(e.variable.pitch_deg, -44.11);        // 0xeec5 = -4411
+  EXPECT_DOUBLE_EQ(e.variable.roll_deg, -44.61);         // 0xee93 = -4461
   EXPECT_DOUBLE_EQ(e.variable.sound_speed_mps, 1536.0);  // 0x0600
   EXPECT_DOUBLE_EQ(e.variable.temperature_c, 23.40);     // 0x0924 = 2340
   EXPECT_DOUBLE_EQ(e.variable.salinity_ppt, 40.0);

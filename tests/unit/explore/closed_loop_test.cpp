@@ -22,7 +22,8 @@ namespace {
 using geometry::Pose3;
 
 struct Scans final : sim::SimulationSink {
-  void scan(std::uint32_t /*index*/, const sim::SonarPing& ping, const Pose3& /*T_true*/, const Pose3& T_odom) override {
+  void scan(std::uint32_t /*index*/, const sim::SonarPing& ping, const Pose3& /*T_true*/,
+            const Pose3& T_odom) override {
     slam::ScanInput in;
     in.T_world_vehicle_odom = T_odom;
     const Eigen::Vector3d rpy = geometry::rpyFromRotation(T_odom.linear());
@@ -97,7 +98,8 @@ Mission runMission(std::uint64_t seed, int budget) {
     std::vector<sim::Waypoint> wps;
     for (const plan::Waypoint& w : *out->waypoints) {
       m.sent.push_back(w);
-      const Pose3 T = T_correction * geometry::poseFromXyzRpy(w.p_world.x(), w.p_world.y(), w.p_world.z(), 0, 0, w.yaw_rad);
+      const Pose3 T =
+          T_correction * geometry::poseFromXyzRpy(w.p_world.x(), w.p_world.y(), w.p_world.z(), 0, 0, w.yaw_rad);
       wps.push_back({T.translation(), geometry::yawOf(T.linear())});
     }
     EXPECT_TRUE(simulation.vehicle().setWaypoints(std::move(wps)).ok());
@@ -114,10 +116,9 @@ TEST(ClosedLoop, AShortTankMissionEndsOnItsBudgetAtHomeTheSameWayEveryTime) {
   auto scene = sim::loadScene(test::sourceDir() / "config/scenes/tank.yaml").value();
   const Mission a = runMission(3, 12);
   ASSERT_EQ(a.ending, Ending::kBudget) << a.summary;
-  EXPECT_GE(a.n_submaps, 12u);  // the spin alone closes four (a submap closes after 90 deg of heading)
+  EXPECT_GE(a.n_submaps, 12u);    // the spin alone closes four (a submap closes after 90 deg of heading)
   EXPECT_GT(a.sent.size(), 12u);  // the spin, plans and the way home
-  for (const plan::Waypoint& w : a.sent)
-    EXPECT_TRUE(scene.bounds_world.contains(w.p_world)) << w.p_world.transpose();
+  for (const plan::Waypoint& w : a.sent) EXPECT_TRUE(scene.bounds_world.contains(w.p_world)) << w.p_world.transpose();
   // Home in the map frame; the vehicle is within its navigation error of it (thesis Eq. 4.1
   // odometry over about 200 s: well under a metre).
   EXPECT_EQ(a.sent.back().p_world, scene.T_world_start.translation());

@@ -22,7 +22,7 @@ ExplorationConfig roomConfig() {
   c.planner.seed = 1;
   c.planner.assume_free_radius_m = 0.0;  // the maps carry all the free space the tests mean
   c.planner.clearance_m = 0.1;
-  c.planner.n_tol = 20;                  // a fully known room says "nothing left" sooner
+  c.planner.n_tol = 20;  // a fully known room says "nothing left" sooner
   c.planner.max_samples = 200;
   c.planner.global_max_candidates = 20;
   return c;
@@ -45,7 +45,8 @@ std::shared_ptr<const map::MergedMap> halfRoom() {
     const double res = config.resolution_m;
     const Eigen::AlignedBox3d west(kRoom.min(), Eigen::Vector3d(0.0, kRoom.max().y(), kRoom.max().z()));
     auto west_walls = [&](const map::VoxelKey& k) { return map::keyToCentre(k, res).x() < 0.0; };
-    return plan::test_fixtures::mergedOf(config, {plan::test_fixtures::carvedGrid(config, west, west_walls)})->snapshot();
+    return plan::test_fixtures::mergedOf(config, {plan::test_fixtures::carvedGrid(config, west, west_walls)})
+        ->snapshot();
   }();
   return map;
 }
@@ -68,7 +69,8 @@ struct SimVehicle {
     stamp_ns += 100'000'000;
     if (steps_left > 0 && --steps_left == 0) T = poseOf(waypoints.back().p_world, waypoints.back().yaw_rad);
   }
-  StepInput input(std::shared_ptr<const map::MergedMap> map, std::size_t n_submaps = 1, int* map_calls = nullptr) const {
+  StepInput input(std::shared_ptr<const map::MergedMap> map, std::size_t n_submaps = 1,
+                  int* map_calls = nullptr) const {
     StepInput in;
     in.stamp_ns = stamp_ns;
     in.T_world_vehicle = T;

@@ -39,9 +39,8 @@ struct CanPair : ::testing::Test {
     if (fds[1] >= 0) ::close(fds[1]);
   }
   std::unique_ptr<CanTransport> adopt(std::vector<CanFilter> filters) {
-    auto t = CanTransport::adopt(
-        io, fds[0], std::move(filters), clock,
-        [this](const can_frame& f, std::int64_t stamp_ns) {
+    auto t =
+        CanTransport::adopt(io, fds[0], std::move(filters), clock, [this](const can_frame& f, std::int64_t stamp_ns) {
           got.push_back(f);
           stamps.push_back(stamp_ns);
         });

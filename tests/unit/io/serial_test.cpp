@@ -146,7 +146,8 @@ TEST_F(SerialFixture, MovesEveryByteBothWaysUnaltered) {
 
   const std::vector<std::uint8_t> up = randomBytes(5000, 8);
   ASSERT_TRUE(t->write(up).ok());
-  ASSERT_TRUE(pumpUntil(io, [&] { return (*dev)->hostBytes().size() >= up.size() && t->health().bytes_tx >= up.size(); }));
+  ASSERT_TRUE(
+      pumpUntil(io, [&] { return (*dev)->hostBytes().size() >= up.size() && t->health().bytes_tx >= up.size(); }));
   EXPECT_EQ((*dev)->hostBytes(), up);
   EXPECT_EQ(t->health().bytes_tx, up.size());
 }
@@ -212,7 +213,11 @@ TEST_F(SerialFixture, MissingDeviceIsReportedAndRetried) {
 
 TEST_F(SerialFixture, RegularFileIsRejectedAsNotATerminal) {
   const auto path = dir.path() / "plain";
-  { std::FILE* f = std::fopen(path.c_str(), "w"); ASSERT_NE(f, nullptr); std::fclose(f); }
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fclose(f);
+  }
   SerialConfig c;
   c.device_path = path.string();
   auto t = makeTransport(c);

@@ -44,8 +44,8 @@ TEST(UdpTest, DeliversWholeDatagramsWithInjectedStamps) {
   }
   ASSERT_TRUE(pumpUntil(io, [&] { return got.size() == sent.size(); }));
   EXPECT_EQ(got, sent);
-  EXPECT_EQ(stamps, (std::vector<std::int64_t>{1'000'000'000, 1'001'000'000, 1'002'000'000, 1'003'000'000,
-                                               1'004'000'000}));
+  EXPECT_EQ(stamps,
+            (std::vector<std::int64_t>{1'000'000'000, 1'001'000'000, 1'002'000'000, 1'003'000'000, 1'004'000'000}));
   EXPECT_EQ(rx.health().frames_rx, sent.size());
   EXPECT_EQ(tx.health().frames_tx, sent.size());
   EXPECT_EQ(rx.health().errors, 0u);
@@ -56,7 +56,8 @@ TEST(UdpTest, OversizedDatagramIsCountedNotDeliveredTruncated) {
   std::vector<std::size_t> got;
   UdpReceiverConfig rc;
   rc.max_datagram_bytes = 100;
-  UdpReceiver rx(io, rc, steadyStampClock(), [&](std::span<const std::uint8_t> d, std::int64_t) { got.push_back(d.size()); });
+  UdpReceiver rx(io, rc, steadyStampClock(),
+                 [&](std::span<const std::uint8_t> d, std::int64_t) { got.push_back(d.size()); });
   ASSERT_TRUE(rx.start().ok());
   UdpSenderConfig sc;
   sc.port = rx.localPort();
@@ -86,7 +87,8 @@ TEST(UdpTest, ConfigErrorsNameTheKey) {
 
 // A loopback TCP server for the client tests: accepts one connection at a time.
 struct TestServer {
-  explicit TestServer(asio::io_context& io) : acceptor(io, asio::ip::tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0)) {}
+  explicit TestServer(asio::io_context& io)
+      : acceptor(io, asio::ip::tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0)) {}
   void acceptOne() {
     acceptor.async_accept([this](const std::error_code& ec, asio::ip::tcp::socket s) {
       if (ec) return;

@@ -60,8 +60,8 @@ TEST(Concurrency, SnapshotReadersAreUnaffectedByTheWriter) {
   const auto built = test_fixtures::buildSubmaps(config, 5, 20, 4, 4.0);
   std::vector<SubmapEntry> entries;
   for (std::size_t i = 0; i < built.size(); ++i) {
-    entries.push_back({static_cast<SubmapId>(i), built[i].grid, built[i].T_world_submap,
-                       built[i].T_world_submap.inverse()});
+    entries.push_back(
+        {static_cast<SubmapId>(i), built[i].grid, built[i].T_world_submap, built[i].T_world_submap.inverse()});
   }
   auto merged = MergedMap::create(config).value();
   ASSERT_TRUE(merged->add(entries[0]).ok());

@@ -128,8 +128,8 @@ TEST(LocalGrid, LeavesCoverExactlyTheKnownVoxels) {
   std::mt19937_64 rng(3);
   const auto poses = test::orbitTrajectory(60, 5.0, -2.0);
   for (const auto& T : poses) {
-    ASSERT_TRUE(grid->insertScan(poses.front().inverse() * T * fan.T_vehicle_sensor, fan,
-                                 scene.scan(T, fan, 0.0, rng)).ok());
+    ASSERT_TRUE(
+        grid->insertScan(poses.front().inverse() * T * fan.T_vehicle_sensor, fan, scene.scan(T, fan, 0.0, rng)).ok());
   }
   grid->finalize();
   std::size_t voxels = 0;
@@ -168,9 +168,9 @@ TEST(LocalGrid, EveryNormalFacesTheNearestOfManySensorOrigins) {
   ASSERT_GT(cloud.size(), 50u);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d& p = cloud.points[i];
-    const Eigen::Vector3d nearest = *std::min_element(origins.begin(), origins.end(), [&](const auto& a, const auto& b) {
-      return (a - p).squaredNorm() < (b - p).squaredNorm();
-    });
+    const Eigen::Vector3d nearest =
+        *std::min_element(origins.begin(), origins.end(),
+                          [&](const auto& a, const auto& b) { return (a - p).squaredNorm() < (b - p).squaredNorm(); });
     EXPECT_GT(cloud.normals[i].dot(nearest - p), 0.0) << p.transpose();
     EXPECT_GT(std::abs(cloud.normals[i].x()), 0.9) << p.transpose();  // the walls' normal is along x
   }

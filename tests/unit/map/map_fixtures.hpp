@@ -16,7 +16,7 @@ struct BuiltSubmap {
 
 // Scans along an orbit split into submaps of `scans_per_submap`, inserted at their true poses.
 inline std::vector<BuiltSubmap> buildSubmaps(const GridConfig& config, int n_submaps, int scans_per_submap,
-                                            std::uint64_t seed, double max_range_m = 5.0) {
+                                             std::uint64_t seed, double max_range_m = 5.0) {
   const auto scene = vog::test::SyntheticScene::pier();
   geometry::SonarFan fan;
   fan.max_range_m = max_range_m;

@@ -61,7 +61,8 @@ TEST(MergeWorker, ABurstOfSubmissionsEndsAtTheNewestSet) {
   const auto built = test_fixtures::buildSubmaps(config, 5, 10, 3, 4.0);
   auto worker = MergeWorker::create(config, MergeConfig{}).value();
   std::uint64_t last = 0;
-  for (int round = 0; round < 20; ++round) last = worker->submit(entriesOf(built, 1 + static_cast<std::size_t>(round) % 5));
+  for (int round = 0; round < 20; ++round)
+    last = worker->submit(entriesOf(built, 1 + static_cast<std::size_t>(round) % 5));
   ASSERT_TRUE(worker->waitIdle().ok());
   EXPECT_EQ(worker->mergedSequence(), last);
   // Round 19 submitted 5 submaps.

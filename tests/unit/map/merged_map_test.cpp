@@ -23,8 +23,9 @@ class MergedMapTest : public ::testing::Test {
     int id = 0;
     for (const auto& s : test_fixtures::buildSubmaps(config_, 6, 20, 9, 4.0)) {
       // Random general rotations and translations (not voxel-aligned) to exercise aliasing.
-      ASSERT_TRUE(vog_->addSubmap(static_cast<SubmapId>(id++), s.grid,
-                                  test_fixtures::perturb(s.T_world_submap, 0.3, 0.15, rng)).ok());
+      ASSERT_TRUE(
+          vog_->addSubmap(static_cast<SubmapId>(id++), s.grid, test_fixtures::perturb(s.T_world_submap, 0.3, 0.15, rng))
+              .ok());
     }
   }
 
@@ -146,7 +147,8 @@ TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
   const auto entries = vog_->entries();
   for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
   std::map<std::tuple<int, int, int>, MergedMap::Block> mirror;
-  for (const auto& [origin, block] : merged->blocksChangedSince(0)) mirror[{origin.x(), origin.y(), origin.z()}] = *block;
+  for (const auto& [origin, block] : merged->blocksChangedSince(0))
+    mirror[{origin.x(), origin.y(), origin.z()}] = *block;
   const std::uint64_t seen = merged->version();
 
   ASSERT_TRUE(merged->remove(entries[0].id).ok());
@@ -154,7 +156,8 @@ TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
   const auto removed = merged->blocksRemovedSince(seen);
   EXPECT_GT(removed.size(), 0u);
   for (const auto& origin : removed) mirror.erase({origin.x(), origin.y(), origin.z()});
-  for (const auto& [origin, block] : merged->blocksChangedSince(seen)) mirror[{origin.x(), origin.y(), origin.z()}] = *block;
+  for (const auto& [origin, block] : merged->blocksChangedSince(seen))
+    mirror[{origin.x(), origin.y(), origin.z()}] = *block;
 
   std::size_t known = 0;
   for (const auto& [origin, block] : mirror) {

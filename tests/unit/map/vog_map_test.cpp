@@ -110,7 +110,9 @@ class VogMapOnPier : public ::testing::Test {
     std::mt19937_64 rng(11);
     int id = 0;
     for (const auto& s : test_fixtures::buildSubmaps(GridConfig{}, 6, 25, 5)) {
-      ASSERT_TRUE(map_->addSubmap(static_cast<SubmapId>(id++), s.grid, test_fixtures::perturb(s.T_world_submap, 0.05, 0.02, rng)).ok());
+      ASSERT_TRUE(map_->addSubmap(static_cast<SubmapId>(id++), s.grid,
+                                  test_fixtures::perturb(s.T_world_submap, 0.05, 0.02, rng))
+                      .ok());
     }
   }
   std::unique_ptr<VogMap> map_;

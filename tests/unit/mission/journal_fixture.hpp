@@ -107,7 +107,8 @@ bool bitEqual(const M& a, const M& b) {
 
 inline bool same(const SubmapClosedRecord& a, const SubmapClosedRecord& b) {
   return a.index == b.index && a.first_stamp_ns == b.first_stamp_ns && a.last_stamp_ns == b.last_stamp_ns &&
-         a.n_scans == b.n_scans && a.reason == b.reason && bitEqual(a.T_world_base_odom.matrix(), b.T_world_base_odom.matrix()) &&
+         a.n_scans == b.n_scans && a.reason == b.reason &&
+         bitEqual(a.T_world_base_odom.matrix(), b.T_world_base_odom.matrix()) &&
          bitEqual(a.base_z_roll_pitch, b.base_z_roll_pitch) && a.has_previous == b.has_previous &&
          bitEqual(a.odometry_from_previous, b.odometry_from_previous) &&
          bitEqual(a.odometry_covariance, b.odometry_covariance) && a.ot_file == b.ot_file &&

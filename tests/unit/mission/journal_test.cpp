@@ -15,8 +15,8 @@ namespace vog::mission {
 namespace {
 
 using testing::readBytes;
-using testing::sampleRecords;
 using testing::same;
+using testing::sampleRecords;
 using testing::writeBytes;
 
 std::filesystem::path writeJournal(const std::filesystem::path& path, const std::vector<JournalRecord>& records) {

@@ -25,7 +25,8 @@ JournalRecord recordAt(std::uint64_t i) {
   if (i % 7 == 3) return MissionStateRecord{static_cast<std::int64_t>(i), MissionState::kPaused};
   if (i % 5 == 1) {
     std::mt19937_64 rng(i);
-    return testing::sampleClosure(static_cast<std::int64_t>(i), static_cast<std::int64_t>(i + 1), 1 + static_cast<int>(i % 6), rng);
+    return testing::sampleClosure(static_cast<std::int64_t>(i), static_cast<std::int64_t>(i + 1),
+                                  1 + static_cast<int>(i % 6), rng);
   }
   const double v = static_cast<double>(i);
   return WaypointRecord{static_cast<std::int64_t>(i), v * 0.5, -v, 1.0 / (v + 1.0), v * 1e-3};
@@ -80,7 +81,8 @@ TEST(JournalKill, EverySyncedRecordSurvivesKill9AndNothingIsMisread) {
     std::uint64_t synced = 0;
     std::uint64_t report = 0;
     if (blocked) {
-      while (::read(fds[0], &report, sizeof report) == static_cast<ssize_t>(sizeof report) && report != kBlockedMarker) {
+      while (::read(fds[0], &report, sizeof report) == static_cast<ssize_t>(sizeof report) &&
+             report != kBlockedMarker) {
         synced = report;
       }
     } else {

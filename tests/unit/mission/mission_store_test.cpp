@@ -221,7 +221,8 @@ TEST(MissionStore, MissionDirectoryWithoutWritePermissionIsAnError) {
   ::close(fds[1]);
   std::string messages;
   char buffer[512];
-  for (ssize_t n; (n = ::read(fds[0], buffer, sizeof buffer)) > 0;) messages.append(buffer, static_cast<std::size_t>(n));
+  for (ssize_t n; (n = ::read(fds[0], buffer, sizeof buffer)) > 0;)
+    messages.append(buffer, static_cast<std::size_t>(n));
   ::close(fds[0]);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);

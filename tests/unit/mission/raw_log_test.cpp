@@ -51,7 +51,8 @@ TEST(RawLog, RoundTripTornTailAndAppend) {
   // Cut inside the last record: the first 49 survive, and reopening appends after them.
   const auto full = testing::readBytes(path);
   const std::size_t last_size = 8 + 11 + chunks.back().bytes.size();
-  testing::writeBytes(path, std::vector<std::uint8_t>(full.begin(), full.end() - static_cast<std::ptrdiff_t>(last_size / 2)));
+  testing::writeBytes(path,
+                      std::vector<std::uint8_t>(full.begin(), full.end() - static_cast<std::ptrdiff_t>(last_size / 2)));
   RawLogContents existing;
   auto log = RawLog::open(path, &existing);
   ASSERT_TRUE(log.ok()) << log.error().message;

@@ -72,7 +72,8 @@ TEST(NavChainTest, MockDevicesThroughTransportsAndCodecsIntoDeadReckoning) {
   });
   ASSERT_TRUE(dvl_port.start().ok() && depth_port.start().ok() && imu_port.start().ok());
   ASSERT_TRUE(pumpUntil(ioc, [&] {
-    return dvl_port.health().state == io::LinkState::kConnected && depth_port.health().state == io::LinkState::kConnected &&
+    return dvl_port.health().state == io::LinkState::kConnected &&
+           depth_port.health().state == io::LinkState::kConnected &&
            imu_port.health().state == io::LinkState::kConnected && (*imu_mock)->server().clientCount() == 1;
   }));
   const std::string p4 = depth::encodeCommand(1, 0, "P4");

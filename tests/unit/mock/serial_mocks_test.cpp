@@ -47,11 +47,10 @@ struct SerialRig {
     c.baud = baud;
     c.reconnect.initial_delay_ms = 5;
     c.reconnect.max_delay_ms = 20;
-    transport = std::make_unique<io::SerialTransport>(
-        ioc, c, io::steadyStampClock(),
-        [this](std::span<const std::uint8_t> b, std::int64_t stamp_ns) {
-          if (on_bytes) on_bytes(b, stamp_ns);
-        });
+    transport = std::make_unique<io::SerialTransport>(ioc, c, io::steadyStampClock(),
+                                                      [this](std::span<const std::uint8_t> b, std::int64_t stamp_ns) {
+                                                        if (on_bytes) on_bytes(b, stamp_ns);
+                                                      });
   }
   bool connected() const { return transport->health().state == io::LinkState::kConnected; }
   asio::io_context ioc;
@@ -178,7 +177,8 @@ TEST(DepthMockTest, PolledAndContinuousRepliesWithEveryFault) {
   // Continuous: every reading is sent; faults on some of them.
   command("P4");
   ASSERT_TRUE(pumpUntil(rig.ioc, [&] { return (*mock)->continuous(); }));
-  const std::map<int, Fault> faults = {{2, Fault::kGarbage}, {4, Fault::kBadChecksum}, {6, Fault::kDropout}, {8, Fault::kTruncate}};
+  const std::map<int, Fault> faults = {
+      {2, Fault::kGarbage}, {4, Fault::kBadChecksum}, {6, Fault::kDropout}, {8, Fault::kTruncate}};
   for (int i = 1; i <= 11; ++i) {
     if (auto f = faults.find(i); f != faults.end()) (*mock)->faults().inject(f->second);
     (*mock)->setPressure(30.0 + i);

@@ -51,7 +51,8 @@ TEST(ImuMockTest, CanOverSeqpacketWithEveryFaultAndReconnect) {
     }
   });
   ASSERT_TRUE(can.start().ok());
-  ASSERT_TRUE(pumpUntil(ioc, [&] { return can.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
+  ASSERT_TRUE(pumpUntil(
+      ioc, [&] { return can.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
 
   const std::map<std::uint32_t, Fault> faults = {
       {2, Fault::kGarbage}, {4, Fault::kTruncate}, {6, Fault::kBadChecksum}, {8, Fault::kDropout}};
@@ -75,7 +76,8 @@ TEST(ImuMockTest, CanOverSeqpacketWithEveryFaultAndReconnect) {
   (*mock)->server().disappear();
   ASSERT_TRUE(pumpUntil(ioc, [&] { return can.health().state != io::LinkState::kConnected; }));
   ASSERT_TRUE((*mock)->server().reappear().ok());
-  ASSERT_TRUE(pumpUntil(ioc, [&] { return can.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
+  ASSERT_TRUE(pumpUntil(
+      ioc, [&] { return can.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
   decoder.reset();
   ASSERT_TRUE((*mock)->send(imuSample(12)).ok());
   ASSERT_TRUE(pumpUntil(ioc, [&] { return got.count(12) == 1; }));
@@ -91,7 +93,8 @@ sonar::SonarFrame sonarFrame(std::uint32_t index) {
   f.window_start_m = 0.75;
   f.window_length_m = 9.0;
   f.samples.resize(96 * 512);
-  for (std::size_t i = 0; i < f.samples.size(); ++i) f.samples[i] = static_cast<std::uint8_t>((i * 31 + index * 7) & 0xFF);
+  for (std::size_t i = 0; i < f.samples.size(); ++i)
+    f.samples[i] = static_cast<std::uint8_t>((i * 31 + index * 7) & 0xFF);
   return f;
 }
 
@@ -101,14 +104,15 @@ TEST(SonarMockTest, FramesOverUdpWithEveryFault) {
   sonar::FrameReassembler reassembler(8);
   std::map<std::uint32_t, sonar::SonarFrame> got;
   std::uint64_t bad_datagrams = 0;
-  io::UdpReceiver rx(ioc, io::UdpReceiverConfig{}, io::steadyStampClock(), [&](std::span<const std::uint8_t> d, std::int64_t) {
-    auto r = codec.decode(d);
-    if (!r.isFrame() || r.consumed() != d.size()) {
-      ++bad_datagrams;
-      return;
-    }
-    if (auto frame = reassembler.add(r.frame())) got[frame->frame_index] = std::move(*frame);
-  });
+  io::UdpReceiver rx(ioc, io::UdpReceiverConfig{}, io::steadyStampClock(),
+                     [&](std::span<const std::uint8_t> d, std::int64_t) {
+                       auto r = codec.decode(d);
+                       if (!r.isFrame() || r.consumed() != d.size()) {
+                         ++bad_datagrams;
+                         return;
+                       }
+                       if (auto frame = reassembler.add(r.frame())) got[frame->frame_index] = std::move(*frame);
+                     });
   ASSERT_TRUE(rx.start().ok());
   auto mock = SonarMock::create(rx.localPort(), 9);
   ASSERT_TRUE(mock.ok()) << mock.error().message;
@@ -156,9 +160,11 @@ TEST(BackseatMockTest, SentencesOverTcpWithFaultsAcksAndReconnect) {
     }
   });
   ASSERT_TRUE(client.start().ok());
-  ASSERT_TRUE(pumpUntil(ioc, [&] { return client.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
+  ASSERT_TRUE(pumpUntil(
+      ioc, [&] { return client.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
 
-  const std::map<int, Fault> faults = {{2, Fault::kGarbage}, {4, Fault::kTruncate}, {6, Fault::kBadChecksum}, {8, Fault::kDropout}};
+  const std::map<int, Fault> faults = {
+      {2, Fault::kGarbage}, {4, Fault::kTruncate}, {6, Fault::kBadChecksum}, {8, Fault::kDropout}};
   for (int i = 0; i < 11; ++i) {
     if (auto f = faults.find(i); f != faults.end()) (*mock)->faults().inject(f->second);
     backseat::NavSentence n;
@@ -198,7 +204,8 @@ TEST(BackseatMockTest, SentencesOverTcpWithFaultsAcksAndReconnect) {
   (*mock)->server().disappear();
   ASSERT_TRUE(pumpUntil(ioc, [&] { return client.health().state != io::LinkState::kConnected; }));
   ASSERT_TRUE((*mock)->server().reappear().ok());
-  ASSERT_TRUE(pumpUntil(ioc, [&] { return client.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
+  ASSERT_TRUE(pumpUntil(
+      ioc, [&] { return client.health().state == io::LinkState::kConnected && (*mock)->server().clientCount() == 1; }));
   decoder.reset();
   backseat::NavSentence n;
   n.depth_m = 99.0;

@@ -29,10 +29,10 @@
 namespace vog::nav {
 namespace {
 
-constexpr std::int64_t kStepNs = 10'000'000;       // simulator step = IMU period at 100 Hz
+constexpr std::int64_t kStepNs = 10'000'000;            // simulator step = IMU period at 100 Hz
 constexpr std::int64_t kCheckpointNs = 10'000'000'000;  // every 10 s of simulated time
 constexpr std::int64_t kMaxDurationNs = 600'000'000'000;
-constexpr double kSigmas = 4.0;                     // k of the k-sigma bounds
+constexpr double kSigmas = 4.0;  // k of the k-sigma bounds
 
 // Wire resolutions (they add to the sensor noise): PD0 velocities are i16 mm/s (RDI PD0 bottom
 // track), IMU attitude i16 1e-4 rad (drivers/imu/README.md); rounding to a step q is uniform
@@ -44,13 +44,13 @@ double roundingVariance(double step) { return step * step / 12.0; }
 struct Checkpoint {
   std::int64_t stamp_ns = 0;
   Eigen::Vector2d error_xy_m = Eigen::Vector2d::Zero();  // dead reckoning minus truth
-  double predicted_sigma_m = 0.0;   // sqrt(E|e|^2) of the 2-D error from the noise model
-  double sampling_error_m = 0.0;    // deterministic error of integrating 5 Hz samples (see below)
+  double predicted_sigma_m = 0.0;                        // sqrt(E|e|^2) of the 2-D error from the noise model
+  double sampling_error_m = 0.0;                         // deterministic error of integrating 5 Hz samples (see below)
   double z_error_m = 0.0;
-  double roll_rad = 0.0;            // the truth has no roll or pitch (sim/vehicle.hpp)
+  double roll_rad = 0.0;  // the truth has no roll or pitch (sim/vehicle.hpp)
   double pitch_rad = 0.0;
   double yaw_error_rad = 0.0;
-  double yaw_sigma_rad = 0.0;       // predicted 1-sigma of the IMU heading error at this time
+  double yaw_sigma_rad = 0.0;  // predicted 1-sigma of the IMU heading error at this time
   NavSolution solution;
 };
 
@@ -61,9 +61,9 @@ struct SimRun {
   std::uint64_t depth_sent = 0;
   std::uint64_t frames_dropped = 0;  // by any of the three stream decoders
   int waypoints_skipped = 0;
-  bool path_completed = false;       // every waypoint reached before the time limit
+  bool path_completed = false;  // every waypoint reached before the time limit
   double distance_m = 0.0;
-  NavSolution after_dvl_stop;        // 2 s after the last DVL ensemble, IMU and depth still fed
+  NavSolution after_dvl_stop;  // 2 s after the last DVL ensemble, IMU and depth still fed
 };
 
 // The simulated devices' bytes through the real decoders into dead reckoning. Stamps are the
@@ -221,7 +221,8 @@ void runSurvey(std::uint64_t seed, SimRun& out) {
   auto waypoints = sim::lawnmowerPath(scene, sim::PathConfig{});
   ASSERT_TRUE(waypoints.ok()) << waypoints.error().message;
   const Eigen::Vector3d start = scene.T_world_start.translation();
-  auto vehicle = sim::VehicleModel::create(world, sim::VehicleConfig{}, start, geometry::yawOf(scene.T_world_start.linear()), 0);
+  auto vehicle =
+      sim::VehicleModel::create(world, sim::VehicleConfig{}, start, geometry::yawOf(scene.T_world_start.linear()), 0);
   ASSERT_TRUE(vehicle.ok()) << vehicle.error().message;
   ASSERT_TRUE(vehicle->setWaypoints(*waypoints).ok());
   const sim::NavSensorConfig sensors;
@@ -315,8 +316,8 @@ TEST(DeadReckoningSimTest, LawnmowerSurveyStaysWithinTheDriftTheNoiseModelPredic
   EXPECT_TRUE(run.path_completed);
 
   const double depth_sigma_m = sensors.depth_noise_fraction * sensors.depth_full_scale_m;
-  const double attitude_sigma_rad =
-      std::sqrt(sensors.imu_roll_pitch_sigma_rad * sensors.imu_roll_pitch_sigma_rad + roundingVariance(kImuAttitudeStep_rad));
+  const double attitude_sigma_rad = std::sqrt(sensors.imu_roll_pitch_sigma_rad * sensors.imu_roll_pitch_sigma_rad +
+                                              roundingVariance(kImuAttitudeStep_rad));
   for (const Checkpoint& c : run.checkpoints) {
     SCOPED_TRACE("t = " + std::to_string(static_cast<double>(c.stamp_ns) * 1e-9) + " s");
     EXPECT_TRUE(c.solution.initialized);
@@ -362,7 +363,6 @@ TEST(DeadReckoningSimTest, LawnmowerSurveyStaysWithinTheDriftTheNoiseModelPredic
   EXPECT_EQ(run.after_dvl_stop.reason.find("imu"), std::string::npos) << run.after_dvl_stop.reason;
   EXPECT_EQ(run.after_dvl_stop.reason.find("depth"), std::string::npos) << run.after_dvl_stop.reason;
   EXPECT_EQ(run.after_dvl_stop.dvl_used, run.dvl_sent);
-
 }
 
 TEST(DeadReckoningSimTest, ASeedGivesIdenticalRunsAndAnotherSeedDiffers) {

@@ -221,9 +221,8 @@ TEST_F(PlannerMaps, ErrorsNameTheBadInput) {
   EXPECT_EQ(near_wall->status, PlanStatus::kNoPath);
   // Inside the west wall (an occupied voxel).
   const double res = map->resolution();
-  const Eigen::Vector3d wall = map::keyToCentre(map::pointToKey(Eigen::Vector3d(-5.0, 0.0, -1.75), 1.0 / res) -
-                                                    map::VoxelKey(1, 0, 0),
-                                                res);
+  const Eigen::Vector3d wall =
+      map::keyToCentre(map::pointToKey(Eigen::Vector3d(-5.0, 0.0, -1.75), 1.0 / res) - map::VoxelKey(1, 0, 0), res);
   ASSERT_EQ(map->query(wall).status, map::Occupancy::kOccupied);
   c = roomConfig();
   c.box_min_world_m.x() = -6.0;
@@ -319,7 +318,8 @@ TEST(NbvPlanner, GlobalSearchFindsViewsInASafeRegionOffAnyFixedLattice) {
   const Eigen::Vector3d lo = map::keyToCentre(map::VoxelKey(-9, -9, -21), res);
   const Eigen::Vector3d hi = map::keyToCentre(map::VoxelKey(40, 9, -15), res);
   auto walls_but_east = [](const map::VoxelKey& k) { return k.x() <= 40; };
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), walls_but_east)});
+  auto map =
+      test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, Eigen::AlignedBox3d(lo, hi), walls_but_east)});
   const Eigen::Vector3d home = map::keyToCentre(map::VoxelKey(0, 0, -18), res);
   PlannerConfig c = roomConfig();
   c.n_max = 1;
@@ -354,8 +354,8 @@ TEST(NbvPlanner, CompleteButNoWayHomeIsNoPath) {
   // Two separate known rooms: the vehicle is in one, home in the other.
   const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
   const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all),
-                                              test_fixtures::carvedGrid(config, east, all)});
+  auto map = test_fixtures::mergedOf(
+      config, {test_fixtures::carvedGrid(config, west, all), test_fixtures::carvedGrid(config, east, all)});
   PlannerConfig c = roomConfig();
   c.n_tol = 20;  // (the gain is zero everywhere: a smaller tree says so sooner)
   c.max_samples = 200;
@@ -715,7 +715,7 @@ TEST(TraversabilityGrid, AContactStaysBlockedThroughUpdatesUntilARebuild) {
   ASSERT_TRUE(grid.isSafe(contact));
   ASSERT_TRUE(grid.edgeIsFree(far, near));
   grid.addContact(contact);
-  grid.addContact(Eigen::Vector3d(NAN, 0.0, 0.0));    // ignored
+  grid.addContact(Eigen::Vector3d(NAN, 0.0, 0.0));      // ignored
   grid.addContact(Eigen::Vector3d(100.0, 0.0, -1.75));  // outside the grid: ignored
   EXPECT_EQ(grid.status(map::pointToKey(contact, 1.0 / config.resolution_m)), map::Occupancy::kOccupied);
   EXPECT_FALSE(grid.isSafe(contact));
@@ -739,8 +739,8 @@ TEST(TraversabilityGrid, ReachableIsTheConnectedSafeRegionInBreadthFirstOrder) {
   auto all = [](const map::VoxelKey&) { return true; };
   const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
   const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all),
-                                              test_fixtures::carvedGrid(config, east, all)});
+  auto map = test_fixtures::mergedOf(
+      config, {test_fixtures::carvedGrid(config, west, all), test_fixtures::carvedGrid(config, east, all)});
   const auto grid = TraversabilityGrid::build(*map, kRoom, anyHeadingBox({1.0, 1.0, 0.5})).value();
   const Eigen::Vector3d from(-3.0, 0.0, -1.75);
   const auto order = grid.reachable(from, grid.statusArray().size());

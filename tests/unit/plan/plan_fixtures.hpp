@@ -72,7 +72,8 @@ inline std::unique_ptr<map::MergedMap> mergedOf(const map::GridConfig& config,
 // out the voxels whose centres are strictly inside the door's x-y extent (a wall voxel seen free
 // once and hit once stays occupied).
 inline std::unique_ptr<map::MergedMap> roomsWithADoor(const map::GridConfig& config, const Eigen::AlignedBox3d& west,
-                                                      const Eigen::AlignedBox3d& east, const Eigen::AlignedBox3d& door) {
+                                                      const Eigen::AlignedBox3d& east,
+                                                      const Eigen::AlignedBox3d& door) {
   auto notInDoor = [&](const VoxelKey& k) {
     const Eigen::Vector3d c = map::keyToCentre(k, config.resolution_m);
     return !((c.head<2>().array() > door.min().head<2>().array()).all() &&

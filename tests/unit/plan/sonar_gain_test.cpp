@@ -70,9 +70,10 @@ TEST(SonarGain, MatchesReferencesOnASonarMap) {
   config.gain_free = 0.25;
   config.gain_occupied = 3.0;
   auto gain = SonarGain::create(config, grid_config.resolution_m).value();
-  const auto cache = TraversabilityGrid::build(*map, Eigen::AlignedBox3d(config.box_min_world_m, config.box_max_world_m),
-                                               config.collision_box_m)
-                         .value();
+  const auto cache =
+      TraversabilityGrid::build(*map, Eigen::AlignedBox3d(config.box_min_world_m, config.box_max_world_m),
+                                config.collision_box_m)
+          .value();
   // Segments from the orbit looking inward (pilings, occupied) and sweeping the heading.
   const std::vector<std::pair<Waypoint, Waypoint>> segments = {
       {{{5.5, 0.0, -2.0}, std::numbers::pi}, {{5.0, 1.0, -2.0}, std::numbers::pi}},
@@ -106,8 +107,8 @@ TEST(SonarGain, OcclusionStopsBeamsAtTheFirstOccupiedVoxel) {
   config.box_max_world_m = {10.0, 10.0, 10.0};
   config.gain_unknown = 1.0;
   auto gain = SonarGain::create(config, res).value();
-  const Waypoint w{{0.0, 0.0, -2.0}, 0.0};  // facing +x, the fan in the x-z plane
-  EXPECT_DOUBLE_EQ(gain.segmentGain(*map, w, w), 0.0);  // free up to the wall, nothing beyond is seen
+  const Waypoint w{{0.0, 0.0, -2.0}, 0.0};                  // facing +x, the fan in the x-z plane
+  EXPECT_DOUBLE_EQ(gain.segmentGain(*map, w, w), 0.0);      // free up to the wall, nothing beyond is seen
   const Waypoint back{{0.0, 0.0, -2.0}, std::numbers::pi};  // facing -x: free 1 m, then unknown
   EXPECT_GT(gain.segmentGain(*map, back, back), 100.0);
 }
@@ -141,8 +142,8 @@ TEST(SonarGain, YawSweepIsCountedAndAFrustumTestWouldSeeAlmostNothing) {
         const Eigen::Vector3d p = T_sensor_world * map::keyToCentre(map::VoxelKey(x, y, z), res);
         const double range = p.norm();
         if (range > config.planner_range_m || range < 1e-9) continue;
-        if (std::abs(std::atan2(p.y(), p.x())) <= half_fov &&
-            std::abs(std::asin(p.z() / range)) <= half_spread && p.x() > 0.0)
+        if (std::abs(std::atan2(p.y(), p.x())) <= half_fov && std::abs(std::asin(p.z() / range)) <= half_spread &&
+            p.x() > 0.0)
           ++frustum;
       }
   EXPECT_LT(frustum, 0.5 * single);  // the frustum misses most of what the beams see

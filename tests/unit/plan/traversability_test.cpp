@@ -152,8 +152,8 @@ TEST(Traversability, CarvedRoomMarginsAndPathHome) {
   for (k.z() = free_keys.min.z(); k.z() <= free_keys.max.z(); ++k.z())
     for (k.y() = free_keys.min.y(); k.y() <= free_keys.max.y(); ++k.y())
       for (k.x() = free_keys.min.x(); k.x() <= free_keys.max.x(); ++k.x()) {
-        const bool inner = ((k - free_keys.min).array() >= r.array()).all() &&
-                           ((free_keys.max - k).array() >= r.array()).all();
+        const bool inner =
+            ((k - free_keys.min).array() >= r.array()).all() && ((free_keys.max - k).array() >= r.array()).all();
         ASSERT_EQ(grid.isSafeKey(k), inner) << k.transpose();
         expected += inner;
       }
@@ -271,8 +271,8 @@ TEST(Traversability, RecoveryGoesAroundAWallNotThroughIt) {
   const Eigen::AlignedBox3d room(Eigen::Vector3d(-3.0, -1.3, -2.5), Eigen::Vector3d(3.0, 2.0, -0.5));
   const Eigen::AlignedBox3d slab(Eigen::Vector3d(-1.0, -0.05, -2.5), Eigen::Vector3d(1.0, 0.05, -0.5));
   auto all = [](const map::VoxelKey&) { return true; };
-  auto map = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, room, all),
-                                              test_fixtures::carvedGrid(config, slab, all)});
+  auto map = test_fixtures::mergedOf(
+      config, {test_fixtures::carvedGrid(config, room, all), test_fixtures::carvedGrid(config, slab, all)});
   const auto grid = TraversabilityGrid::build(*map, room, kCollisionBox).value();
   const Eigen::Vector3d p(0.0, -0.7, -1.5);
   ASSERT_FALSE(grid.isSafe(p));
@@ -301,8 +301,8 @@ TEST(Traversability, RecoverySeesWallsOutsideTheGrid) {
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-3.0, -0.4, -2.5), room.max());
   const Eigen::Vector3d p(0.0, -2.5, -1.5);
   auto all = [](const map::VoxelKey&) { return true; };
-  auto walled = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, room, all),
-                                                 test_fixtures::carvedGrid(config, slab, all)});
+  auto walled = test_fixtures::mergedOf(
+      config, {test_fixtures::carvedGrid(config, room, all), test_fixtures::carvedGrid(config, slab, all)});
   const auto grid = TraversabilityGrid::build(*walled, box, kCollisionBox).value();
   const map::VoxelKey wall_key = map::pointToKey(Eigen::Vector3d(0.0, -1.95, -1.5), 1.0 / config.resolution_m);
   ASSERT_EQ(walled->at(wall_key).status, map::Occupancy::kOccupied);

@@ -55,7 +55,8 @@ TEST(Odometry, Eq41LiteralDriftVarianceIsTDtSigma) {
   const Eigen::Vector3d v = driftVariance(cfg, T, 1000);
   const Eigen::Vector3d pred = cfg.predictedVariance(T);
   EXPECT_NEAR(pred.x(), T * 0.01 * 0.00138, 1e-15);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
 }
 
 TEST(Odometry, RandomWalkDriftVarianceIsTSigma) {
@@ -65,7 +66,8 @@ TEST(Odometry, RandomWalkDriftVarianceIsTSigma) {
   const Eigen::Vector3d v = driftVariance(cfg, T, 1000);
   const Eigen::Vector3d pred = cfg.predictedVariance(T);
   EXPECT_NEAR(pred.x(), T * 0.00138, 1e-15);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
   // The stress profile drifts 1/dt = 100 times more in variance than the literal one.
   OdometryNoiseConfig literal;
   EXPECT_NEAR(pred.x() / literal.predictedVariance(T).x(), 100.0, 1e-9);
@@ -78,7 +80,8 @@ TEST(Odometry, WithoutNoiseTheIntegratorReproducesACurvedTrajectory) {
   auto o = OdometryCorruptor::create(cfg, 1);
   ASSERT_TRUE(o.ok());
   auto truth = [](double t) {
-    return Eigen::Vector3d(3.0 * std::cos(0.1 * t), 2.0 * std::sin(0.1 * t), geometry::wrapAngle(0.1 * t + std::numbers::pi / 2));
+    return Eigen::Vector3d(3.0 * std::cos(0.1 * t), 2.0 * std::sin(0.1 * t),
+                           geometry::wrapAngle(0.1 * t + std::numbers::pi / 2));
   };
   o->reset(truth(0).x(), truth(0).y(), truth(0).z());
   for (int k = 1; k <= 10000; ++k) {
@@ -110,7 +113,8 @@ TEST(Odometry, WorldFrameNoiseHasTheSameVariance) {
   const double T = 20.0;
   const Eigen::Vector3d v = driftVariance(cfg, T, 1000, circle(0.2));
   const Eigen::Vector3d pred = cfg.predictedVariance(T);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(v[i] / pred[i], 1.0, 0.10) << "axis " << i << ": " << v[i] << " vs " << pred[i];
   cfg.sigma2_y_m2ps = 2.0 * cfg.sigma2_x_m2ps;  // anisotropic: no longer the same distribution
   const Status st = cfg.validate();
   ASSERT_FALSE(st.ok());
@@ -149,9 +153,10 @@ TEST(Odometry, ProfileNamesAndBadConfig) {
 }
 
 std::unique_ptr<World> seabedWorld() {
-  auto s = parseScene("name: t\nbounds: {min: [-20, -20, -20], max: [20, 20, 0]}\nstart: {xyz: [0, 0, -2]}\n"
-                      "objects:\n  - {type: plane, pose: {xyz: [0, 0, -10]}, size: [100, 100]}\n",
-                      "t.yaml", ".");
+  auto s = parseScene(
+      "name: t\nbounds: {min: [-20, -20, -20], max: [20, 20, 0]}\nstart: {xyz: [0, 0, -2]}\n"
+      "objects:\n  - {type: plane, pose: {xyz: [0, 0, -10]}, size: [100, 100]}\n",
+      "t.yaml", ".");
   EXPECT_TRUE(s.ok());
   auto w = World::create(*s);
   EXPECT_TRUE(w.ok());

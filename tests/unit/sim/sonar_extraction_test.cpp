@@ -28,7 +28,8 @@ TEST(SonarExtraction, RecoversSimulatedRangesOnThePilingsScene) {
   int hits = 0, misses = 0, bad = 0;
   double worst = 0.0;
   // Turn in place at a few spots: pilings near and far, seabed, open water.
-  for (const Eigen::Vector3d& p : {Eigen::Vector3d(-5, 0, -1.5), Eigen::Vector3d(0, -1, -3.0), Eigen::Vector3d(4.5, 3, -0.8)}) {
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(-5, 0, -1.5), Eigen::Vector3d(0, -1, -3.0), Eigen::Vector3d(4.5, 3, -0.8)}) {
     for (int k = 0; k < 24; ++k) {
       const geometry::Pose3 T = geometry::poseFromXyzRpy(p.x(), p.y(), p.z(), 0, 0, k * M_PI / 12);
       const SonarPing ping = model->ping(T, k, true);

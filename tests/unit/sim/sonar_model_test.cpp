@@ -69,7 +69,8 @@ TEST(SonarModel, BeamRangeIsTheMinimumOverItsSubRays) {
 TEST(SonarModel, NoReturnBeyondMaxRangeAndNoiseHasTheConfiguredSigma) {
   const auto far = wideWorldFrom("  - {type: plane, pose: {xyz: [11.5, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
   SonarModel mf = makeModel(*far, 0.0);
-  for (const float r : mf.ping(geometry::Pose3::Identity(), 0, false).scan.range_m) EXPECT_EQ(r, geometry::RangeScan::kNoReturn);
+  for (const float r : mf.ping(geometry::Pose3::Identity(), 0, false).scan.range_m)
+    EXPECT_EQ(r, geometry::RangeScan::kNoReturn);
 
   const auto w = wideWorldFrom("  - {type: plane, pose: {xyz: [4, 0, 0], rpy_deg: [0, 90, 0]}, size: [20, 20]}\n");
   SonarModel m = makeModel(*w, 0.01, 42);
@@ -78,7 +79,8 @@ TEST(SonarModel, NoReturnBeyondMaxRangeAndNoiseHasTheConfiguredSigma) {
   for (int k = 0; k < 200; ++k) {
     const SonarPing p = m.ping(geometry::Pose3::Identity(), k, false);
     for (int i = 0; i < 96; ++i) {
-      const double e = static_cast<double>(p.scan.range_m[static_cast<std::size_t>(i)]) - 4.0 / std::cos(m.config().fan.beamAzimuth(i));
+      const double e = static_cast<double>(p.scan.range_m[static_cast<std::size_t>(i)]) -
+                       4.0 / std::cos(m.config().fan.beamAzimuth(i));
       sum += e;
       sum2 += e * e;
       ++n;
@@ -90,8 +92,9 @@ TEST(SonarModel, NoReturnBeyondMaxRangeAndNoiseHasTheConfiguredSigma) {
 }
 
 TEST(SonarModel, DeterministicPerSeed) {
-  const auto w = wideWorldFrom("  - {type: cylinder, pose: {xyz: [3, 0, 0]}, radius: 0.5, length: 4}\n"
-                           "  - {type: plane, pose: {xyz: [0, 0, -3]}, size: [30, 30]}\n");
+  const auto w = wideWorldFrom(
+      "  - {type: cylinder, pose: {xyz: [3, 0, 0]}, radius: 0.5, length: 4}\n"
+      "  - {type: plane, pose: {xyz: [0, 0, -3]}, size: [30, 30]}\n");
   SonarModel a = makeModel(*w, 0.01, 5), b = makeModel(*w, 0.01, 5), c = makeModel(*w, 0.01, 6);
   const geometry::Pose3 T = geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0.1);
   for (int k = 0; k < 3; ++k) {
@@ -105,8 +108,9 @@ TEST(SonarModel, DeterministicPerSeed) {
 
 TEST(SonarModel, FrameLayoutPutsTheEchoAtTheRangeSample) {
   // The top beams pass over the piling's top into open water: no return.
-  const auto w = wideWorldFrom("  - {type: cylinder, pose: {xyz: [3, 0, -1.5]}, radius: 0.5, length: 2}\n"
-                           "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [30, 30]}\n");
+  const auto w = wideWorldFrom(
+      "  - {type: cylinder, pose: {xyz: [3, 0, -1.5]}, radius: 0.5, length: 2}\n"
+      "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [30, 30]}\n");
   SonarModel m = makeModel(*w, 0.01, 3);
   const geometry::Pose3 T = geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0.05);
   const SonarPing p = m.ping(T, 77, true, 9);

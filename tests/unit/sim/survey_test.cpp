@@ -124,11 +124,14 @@ TEST(Survey, SameSeedSameFilesOtherSeedOtherNoise) {
   ASSERT_TRUE(runSurvey(*w, path, cfg, "p", b.path()).ok());
   cfg.seed = 12;
   ASSERT_TRUE(runSurvey(*w, path, cfg, "p", c.path()).ok());
-  for (const char* f : {"ground_truth.csv", "odometry.csv", "scans.csv", "frames.bin", "dvl.csv", "imu.csv", "depth.csv"}) {
+  for (const char* f :
+       {"ground_truth.csv", "odometry.csv", "scans.csv", "frames.bin", "dvl.csv", "imu.csv", "depth.csv"}) {
     EXPECT_EQ(slurp(a.path() / f), slurp(b.path() / f)) << f;
   }
-  EXPECT_EQ(slurp(a.path() / "ground_truth.csv"), slurp(c.path() / "ground_truth.csv"));  // truth does not depend on the seed
-  for (const char* f : {"odometry.csv", "scans.csv", "frames.bin", "imu.csv"}) EXPECT_NE(slurp(a.path() / f), slurp(c.path() / f)) << f;
+  EXPECT_EQ(slurp(a.path() / "ground_truth.csv"),
+            slurp(c.path() / "ground_truth.csv"));  // truth does not depend on the seed
+  for (const char* f : {"odometry.csv", "scans.csv", "frames.bin", "imu.csv"})
+    EXPECT_NE(slurp(a.path() / f), slurp(c.path() / f)) << f;
 }
 
 TEST(Survey, BlockedWaypointsAreSkippedAndTheVehicleNeverCollides) {
@@ -152,7 +155,8 @@ TEST(Survey, BlockedWaypointsAreSkippedAndTheVehicleNeverCollides) {
     std::vector<double> v;
     std::stringstream ls(line);
     for (std::string f; std::getline(ls, f, ',');) v.push_back(std::stod(f));
-    ASSERT_FALSE(w->boxCollides(geometry::poseFromXyzRpy(v[1], v[2], v[3], 0, 0, v[6]), Eigen::Vector3d(0.5, 0.5, 0.25)));
+    ASSERT_FALSE(
+        w->boxCollides(geometry::poseFromXyzRpy(v[1], v[2], v[3], 0, 0, v[6]), Eigen::Vector3d(0.5, 0.5, 0.25)));
   }
 }
 
@@ -190,7 +194,8 @@ TEST(Paths, WaypointFileErrorsNameLineAndKey) {
   std::ofstream(dir.path() / "bad.yaml") << "waypoints:\n  - {xyz: [1, 2, -3]}\n  - {xyz: [1, 2], yaw: 3}\n";
   auto bad = loadWaypointFile(dir.path() / "bad.yaml");
   ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("bad.yaml:3: waypoints[1].yaw: unknown key"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("bad.yaml:3: waypoints[1].yaw: unknown key"), std::string::npos)
+      << bad.error().message;
   EXPECT_FALSE(loadWaypointFile(dir.path() / "missing.yaml").ok());
 }
 

@@ -25,7 +25,8 @@ std::optional<double> refCylinder(const geometry::Pose3& T, double r, double len
   const Eigen::Vector3d d = T.linear().transpose() * d_w;
   (void)len;
   std::optional<double> best;
-  const double a = d.head<2>().squaredNorm(), b = 2 * o.head<2>().dot(d.head<2>()), c = o.head<2>().squaredNorm() - r * r;
+  const double a = d.head<2>().squaredNorm(), b = 2 * o.head<2>().dot(d.head<2>()),
+               c = o.head<2>().squaredNorm() - r * r;
   const double disc = b * b - 4 * a * c;
   if (a > 0 && disc >= 0) {
     for (const double t : {(-b - std::sqrt(disc)) / (2 * a), (-b + std::sqrt(disc)) / (2 * a)}) {
@@ -43,8 +44,10 @@ std::optional<double> refCylinder(const geometry::Pose3& T, double r, double len
 }
 
 TEST(WorldRayCast, CylinderMatchesAnalyticRanges) {
-  const auto w = worldFrom("  - {type: cylinder, pose: {xyz: [1, 2, -3], rpy_deg: [5, -10, 30]}, radius: 0.3, length: 6}\n");
-  const geometry::Pose3 T = geometry::poseFromXyzRpy(1, 2, -3, geometry::deg2rad(5), geometry::deg2rad(-10), geometry::deg2rad(30));
+  const auto w =
+      worldFrom("  - {type: cylinder, pose: {xyz: [1, 2, -3], rpy_deg: [5, -10, 30]}, radius: 0.3, length: 6}\n");
+  const geometry::Pose3 T =
+      geometry::poseFromXyzRpy(1, 2, -3, geometry::deg2rad(5), geometry::deg2rad(-10), geometry::deg2rad(30));
   // Perpendicular shot: distance from the axis minus the radius.
   {
     const Eigen::Vector3d axis_point = T * Eigen::Vector3d(0, 0, 0.7);
@@ -59,7 +62,8 @@ TEST(WorldRayCast, CylinderMatchesAnalyticRanges) {
   for (int i = 0; i < 2000; ++i) {
     const Eigen::Vector3d o = T * Eigen::Vector3d(0, 0, 0) + 5.0 * randomUnit(rng);
     // Aim near the cylinder so that most rays hit the side or a cap.
-    const Eigen::Vector3d target = T * Eigen::Vector3d(0.5 * randomUnit(rng).x(), 0.5 * randomUnit(rng).y(), 3.2 * randomUnit(rng).z());
+    const Eigen::Vector3d target =
+        T * Eigen::Vector3d(0.5 * randomUnit(rng).x(), 0.5 * randomUnit(rng).y(), 3.2 * randomUnit(rng).z());
     const Eigen::Vector3d d = (target - o).normalized();
     const auto ref = refCylinder(T, 0.3, 6, o, d, true, -3, 3);
     const auto hit = w->castRay(o, d, 20.0);
@@ -79,7 +83,8 @@ TEST(WorldRayCast, PlaneMatchesAnalyticRanges) {
   std::mt19937_64 rng(11);
   int hits = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector3d o(std::uniform_real_distribution<double>(-4, 4)(rng), std::uniform_real_distribution<double>(-4, 4)(rng), 0.0);
+    const Eigen::Vector3d o(std::uniform_real_distribution<double>(-4, 4)(rng),
+                            std::uniform_real_distribution<double>(-4, 4)(rng), 0.0);
     Eigen::Vector3d d = randomUnit(rng);
     d.z() = -std::abs(d.z()) - 0.2;
     d.normalize();
@@ -99,7 +104,8 @@ TEST(WorldRayCast, PlaneMatchesAnalyticRanges) {
 }
 
 // Reference: slab method on the box in its own frame.
-std::optional<double> refBox(const geometry::Pose3& T, const Eigen::Vector3d& size, const Eigen::Vector3d& o_w, const Eigen::Vector3d& d_w) {
+std::optional<double> refBox(const geometry::Pose3& T, const Eigen::Vector3d& size, const Eigen::Vector3d& o_w,
+                             const Eigen::Vector3d& d_w) {
   const Eigen::Vector3d o = T.inverse() * o_w;
   const Eigen::Vector3d d = T.linear().transpose() * d_w;
   double t0 = 0, t1 = 1e9;
@@ -119,7 +125,8 @@ TEST(WorldRayCast, BoxMatchesAnalyticRanges) {
   int hits = 0;
   for (int i = 0; i < 2000; ++i) {
     const Eigen::Vector3d o = T.translation() + 3.0 * randomUnit(rng);
-    const Eigen::Vector3d target = T * Eigen::Vector3d(0.6 * randomUnit(rng).x(), 0.4 * randomUnit(rng).y(), 0.3 * randomUnit(rng).z());
+    const Eigen::Vector3d target =
+        T * Eigen::Vector3d(0.6 * randomUnit(rng).x(), 0.4 * randomUnit(rng).y(), 0.3 * randomUnit(rng).z());
     const Eigen::Vector3d d = (target - o).normalized();
     const auto ref = refBox(T, Eigen::Vector3d(1.0, 0.6, 0.5), o, d);
     const auto hit = w->castRay(o, d, 20.0);
@@ -142,7 +149,8 @@ TEST(WorldRayCast, TankWallIsHitFromInsideAndNothingBeyondMaxRange) {
   const auto w = worldFrom("  - {type: tank, pose: {xyz: [0, 0, -3], rpy_deg: [0, 0, 0]}, radius: 3.5, height: 3}\n");
   std::mt19937_64 rng(5);
   for (int i = 0; i < 500; ++i) {
-    const Eigen::Vector3d o(std::uniform_real_distribution<double>(-2, 2)(rng), std::uniform_real_distribution<double>(-2, 2)(rng), -1.5);
+    const Eigen::Vector3d o(std::uniform_real_distribution<double>(-2, 2)(rng),
+                            std::uniform_real_distribution<double>(-2, 2)(rng), -1.5);
     const double a = std::uniform_real_distribution<double>(-3.14, 3.14)(rng);
     const Eigen::Vector3d d(std::cos(a), std::sin(a), 0.0);
     // Exit distance of a ray from inside a circle: t = -o.d + sqrt((o.d)^2 - |o|^2 + r^2).
@@ -162,11 +170,12 @@ TEST(WorldRayCast, MeshCubeMatchesTheBoxPrimitive) {
   vog::test::TempDir dir("vog-sim-world");
   // A unit cube as an ASCII OBJ, scaled by 2 in the scene: the same as a 2 m box.
   std::ofstream(dir.path() / "cube.obj") << "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n"
-                                             "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
-                                             "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
-                                             "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
-  const auto mesh = worldFrom("  - {type: mesh, pose: {xyz: [1, 0, 0], rpy_deg: [0, 0, 40]}, file: cube.obj, scale: 2.0}\n",
-                              "{min: [-10, -10, -10], max: [10, 10, 10]}", dir.path());
+                                            "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
+                                            "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                                            "f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+  const auto mesh =
+      worldFrom("  - {type: mesh, pose: {xyz: [1, 0, 0], rpy_deg: [0, 0, 40]}, file: cube.obj, scale: 2.0}\n",
+                "{min: [-10, -10, -10], max: [10, 10, 10]}", dir.path());
   const auto box = worldFrom("  - {type: box, pose: {xyz: [1, 0, 0], rpy_deg: [0, 0, 40]}, size: [2, 2, 2]}\n");
   std::mt19937_64 rng(9);
   for (int i = 0; i < 500; ++i) {
@@ -179,7 +188,8 @@ TEST(WorldRayCast, MeshCubeMatchesTheBoxPrimitive) {
 }
 
 TEST(WorldCollision, BoxAgainstCylinderAtTheExactClearance) {
-  const auto w = worldFrom("  - {type: cylinder, pose: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}, radius: 0.3, length: 6}\n");
+  const auto w =
+      worldFrom("  - {type: cylinder, pose: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}, radius: 0.3, length: 6}\n");
   const Eigen::Vector3d half(0.5, 0.5, 0.25);
   // Face of the box toward the cylinder at distance 0.3 + 0.5 from the axis: touching.
   EXPECT_FALSE(w->boxCollides(geometry::poseFromXyzRpy(0.81, 0, 0, 0, 0, 0), half));
@@ -193,8 +203,9 @@ TEST(WorldCollision, BoxAgainstCylinderAtTheExactClearance) {
 }
 
 TEST(WorldCollision, PlaneAndSolidInterior) {
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [14, 10]}\n"
-                           "  - {type: box, pose: {xyz: [5, 0, 0]}, size: [4, 4, 4]}\n");
+  const auto w = worldFrom(
+      "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [14, 10]}\n"
+      "  - {type: box, pose: {xyz: [5, 0, 0]}, size: [4, 4, 4]}\n");
   const Eigen::Vector3d half(0.5, 0.5, 0.25);
   EXPECT_FALSE(w->boxCollides(geometry::poseFromXyzRpy(0, 0, -3.74, 0, 0, 0), half));
   EXPECT_TRUE(w->boxCollides(geometry::poseFromXyzRpy(0, 0, -3.76, 0, 0, 0), half));
@@ -205,8 +216,9 @@ TEST(WorldCollision, PlaneAndSolidInterior) {
 }
 
 TEST(WorldSurface, SamplesLieOnTheSurfacesAtTheRequestedDensity) {
-  const auto w = worldFrom("  - {type: cylinder, pose: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}, radius: 0.5, length: 2}\n"
-                           "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [4, 3]}\n");
+  const auto w = worldFrom(
+      "  - {type: cylinder, pose: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}, radius: 0.5, length: 2}\n"
+      "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [4, 3]}\n");
   const double spacing = 0.05;
   const auto cloud = w->sampleSurface(spacing, 1);
   ASSERT_TRUE(cloud.hasNormals());
@@ -236,9 +248,10 @@ TEST(WorldSurface, SamplesLieOnTheSurfacesAtTheRequestedDensity) {
 TEST(WorldObservable, HiddenAndOutOfBoxPointsAreNotObservable) {
   // A seabed wider than the box and a solid block resting on it: the seabed under the block is
   // hidden, the seabed outside the box is out, the block's top is seen.
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [16, 16]}\n"
-                           "  - {type: box, pose: {xyz: [0, 0, -3.5]}, size: [2, 2, 1]}\n",
-                           "{min: [-5, -5, -4], max: [5, 5, 0]}");
+  const auto w = worldFrom(
+      "  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [16, 16]}\n"
+      "  - {type: box, pose: {xyz: [0, 0, -3.5]}, size: [2, 2, 1]}\n",
+      "{min: [-5, -5, -4], max: [5, 5, 0]}");
   geometry::PointCloud pts;
   pts.points = {{0, 0, -4}, {-3, 3, -4}, {7, 0, -4}, {0.5, 0.5, -3}};
   ObservableConfig cfg;
@@ -247,15 +260,16 @@ TEST(WorldObservable, HiddenAndOutOfBoxPointsAreNotObservable) {
   EXPECT_GT(obs->n_viewpoints, 100u);
   const auto& seen = obs->points.points;
   auto has = [&](const Eigen::Vector3d& p) { return std::find(seen.begin(), seen.end(), p) != seen.end(); };
-  EXPECT_FALSE(has({0, 0, -4}));   // under the block
-  EXPECT_TRUE(has({-3, 3, -4}));   // open seabed
-  EXPECT_FALSE(has({7, 0, -4}));   // outside the box
+  EXPECT_FALSE(has({0, 0, -4}));     // under the block
+  EXPECT_TRUE(has({-3, 3, -4}));     // open seabed
+  EXPECT_FALSE(has({7, 0, -4}));     // outside the box
   EXPECT_TRUE(has({0.5, 0.5, -3}));  // top of the block
   EXPECT_EQ(seen.size(), 2u);
 }
 
 TEST(WorldObservable, MaxRangeLimitsVisibility) {
-  const auto w = worldFrom("  - {type: plane, pose: {xyz: [0, 0, -10]}, size: [4, 4]}\n", "{min: [-2, -2, -10], max: [2, 2, 0]}");
+  const auto w =
+      worldFrom("  - {type: plane, pose: {xyz: [0, 0, -10]}, size: [4, 4]}\n", "{min: [-2, -2, -10], max: [2, 2, 0]}");
   geometry::PointCloud pts;
   pts.points = {{0, 0, -10}};
   ObservableConfig cfg;

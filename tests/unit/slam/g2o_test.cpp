@@ -123,8 +123,8 @@ Synthetic3d makeSynthetic3d(unsigned seed, int n) {
   Synthetic3d s;
   for (int i = 0; i < n; ++i) {
     const double a = 0.3 * i;
-    s.truth.push_back(geometry::poseFromXyzRpy(3 * std::cos(a), 3 * std::sin(a), 0.1 * i, 0.05 * std::sin(a), 0.02 * i,
-                                               a + 1.57));
+    s.truth.push_back(
+        geometry::poseFromXyzRpy(3 * std::cos(a), 3 * std::sin(a), 0.1 * i, 0.05 * std::sin(a), 0.02 * i, a + 1.57));
   }
   Matrix6d info = Matrix6d::Identity() * 400.0;
   info.bottomRightCorner<3, 3>() *= 10.0;
@@ -140,8 +140,8 @@ Synthetic3d makeSynthetic3d(unsigned seed, int n) {
     Z.translation() += dt;
     Z.linear() = Z.linear() * Eigen::AngleAxisd(dr.norm(), dr.normalized()).toRotationMatrix();
     const Eigen::Quaterniond q(Z.linear());
-    os << "EDGE_SE3:QUAT " << i << " " << j << " " << Z.translation().transpose() << " " << q.x() << " " << q.y()
-       << " " << q.z() << " " << q.w();
+    os << "EDGE_SE3:QUAT " << i << " " << j << " " << Z.translation().transpose() << " " << q.x() << " " << q.y() << " "
+       << q.z() << " " << q.w();
     for (int r = 0; r < 6; ++r) {
       for (int c = r; c < 6; ++c) os << " " << info(r, c);
     }
@@ -153,8 +153,8 @@ Synthetic3d makeSynthetic3d(unsigned seed, int n) {
     T.translation() += Eigen::Vector3d(0.03 * i, -0.02 * i, 0.01 * i);
     T.linear() = T.linear() * Eigen::AngleAxisd(0.004 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Quaterniond q(T.linear());
-    os << "VERTEX_SE3:QUAT " << i << " " << T.translation().transpose() << " " << q.x() << " " << q.y() << " "
-       << q.z() << " " << q.w() << "\n";
+    os << "VERTEX_SE3:QUAT " << i << " " << T.translation().transpose() << " " << q.x() << " " << q.y() << " " << q.z()
+       << " " << q.w() << "\n";
   }
   os << "FIX 0\n";
   for (int i = 0; i + 1 < n; ++i) writeEdge(i, i + 1);
@@ -191,8 +191,8 @@ TEST(G2o3d, OptimisationRecoversHelixAndChi2MatchesQuaternionDefinition) {
   EXPECT_LT(r->chi2_final, 3.0 * 6 * 64);
   double max_err = 0.0;
   for (int i = 0; i < 60; ++i) {
-    max_err = std::max(max_err, geometry::translationDistance(graph->vertices_se3.at(i),
-                                                              s.truth[static_cast<std::size_t>(i)]));
+    max_err = std::max(max_err,
+                       geometry::translationDistance(graph->vertices_se3.at(i), s.truth[static_cast<std::size_t>(i)]));
   }
   EXPECT_LT(max_err, 0.3);
   // Odometry initialisation composes the chain and reaches the same optimum.
@@ -213,13 +213,13 @@ void expectError(const std::string& text, const std::string& needle) {
 
 TEST(G2oParse, MalformedLinesRejectedWithLineNumber) {
   const std::string v = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\n";
-  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0\n", "line 3");             // too few fields
-  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1 7\n", "line 3");         // trailing field
+  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0\n", "line 3");      // too few fields
+  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1 7\n", "line 3");  // trailing field
   expectError(v + "EDGE_SE2 0 1 1 x 0 1 0 0 1 0 1\n", "'x' is not a finite number");
   expectError(v + "EDGE_SE2 0 1 1 nan 0 1 0 0 1 0 1\n", "line 3");
   expectError(v + "EDGE_SE2 0 1.5 1 0 0 1 0 0 1 0 1\n", "not an integer id");
   expectError(v + "\n# comment\nEDGE_SE2 0 7 1 0 0 1 0 0 1 0 1\n", "line 5: edge references missing vertex 7");
-  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 0\n", "line 3: information");  // singular information
+  expectError(v + "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 0\n", "line 3: information");    // singular information
   expectError(v + "EDGE_SE2 0 1 1 0 0 1 2 0 1 0 1\n", "not positive definite");  // indefinite
   expectError(v + "VERTEX_SE2 1 0 0 0\n", "line 3: duplicate vertex id 1");
   expectError(v + "VERTEX_XY 2 0 0\n", "line 3: unsupported tag 'VERTEX_XY'");

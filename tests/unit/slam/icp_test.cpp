@@ -27,8 +27,8 @@ struct Plane {
 
 // Samples planes (in the target frame) on a jittered grid, range noise along the normal, normals
 // perturbed by normal_noise_rad; then expresses the cloud in the frame `T_frame_target`.
-PointCloud samplePlanes(const std::vector<Plane>& planes, const Pose3& T_frame_target, double spacing_m,
-                        double noise_m, double normal_noise_rad, unsigned seed) {
+PointCloud samplePlanes(const std::vector<Plane>& planes, const Pose3& T_frame_target, double spacing_m, double noise_m,
+                        double normal_noise_rad, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> jitter(-0.5, 0.5);
@@ -39,8 +39,7 @@ PointCloud samplePlanes(const std::vector<Plane>& planes, const Pose3& T_frame_t
       for (double b = 0.0; b <= pl.v_len; b += spacing_m) {
         const Eigen::Vector3d p = pl.origin + (a + spacing_m * jitter(rng)) * pl.u +
                                   (b + spacing_m * jitter(rng)) * pl.v + noise_m * g(rng) * n;
-        const Eigen::Vector3d nn =
-            (n + normal_noise_rad * Eigen::Vector3d(g(rng), g(rng), g(rng))).normalized();
+        const Eigen::Vector3d nn = (n + normal_noise_rad * Eigen::Vector3d(g(rng), g(rng), g(rng))).normalized();
         cloud.points.push_back(T_frame_target * p);
         cloud.normals.push_back(T_frame_target.linear() * nn);
       }

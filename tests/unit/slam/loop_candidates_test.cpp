@@ -24,8 +24,8 @@ SubmapFootprint footprint(std::int64_t index, const geometry::Pose3& T_world_sub
 TEST(LoopCandidates, CentroidInsideOtherBoxUnderCurrentPoses) {
   std::vector<SubmapFootprint> maps;
   maps.push_back(footprint(0, geometry::poseFromXyzRpy(0, 0, 0, 0, 0, 0)));
-  maps.push_back(footprint(1, geometry::poseFromXyzRpy(0.5, 0, 0, 0, 0, 0)));   // consecutive: skipped
-  maps.push_back(footprint(2, geometry::poseFromXyzRpy(20, 0, 0, 0, 0, 0)));    // far away
+  maps.push_back(footprint(1, geometry::poseFromXyzRpy(0.5, 0, 0, 0, 0, 0)));      // consecutive: skipped
+  maps.push_back(footprint(2, geometry::poseFromXyzRpy(20, 0, 0, 0, 0, 0)));       // far away
   maps.push_back(footprint(3, geometry::poseFromXyzRpy(1.0, 1.0, 0, 0, 0, 0.2)));  // overlaps 0, 1
   // Seen from the far side, facing back, with its centroid near the far end of its box: the centroid
   // lands at world (1, 0), outside 0's box (x >= 2), while 0's centroid (5, 0) maps to (5, 0) in its
@@ -53,7 +53,8 @@ TEST(LoopCandidates, CentroidInsideOtherBoxUnderCurrentPoses) {
 }
 
 TEST(LoopCandidates, BadInputNamed) {
-  std::vector<SubmapFootprint> maps{footprint(0, geometry::Pose3::Identity()), footprint(7, geometry::Pose3::Identity())};
+  std::vector<SubmapFootprint> maps{footprint(0, geometry::Pose3::Identity()),
+                                    footprint(7, geometry::Pose3::Identity())};
   maps[1].aabb_min_submap.x() = 9.0;  // min > max
   auto r = findLoopCandidates(maps);
   ASSERT_FALSE(r.ok());

@@ -55,9 +55,8 @@ inline Run makeRun(int n_scans, int stride, double cov_xy_m2_per_s, double yaw_b
       const double yaw = rpy_odom.z();
       const Eigen::Vector3d t = T_odom.translation();
       T_odom = geometry::poseFromXyzRpy(t.x() + std::cos(yaw) * d.x() - std::sin(yaw) * d.y(),
-                                        t.y() + std::sin(yaw) * d.x() + std::cos(yaw) * d.y(),
-                                        T_true.translation().z(), rpy_true.x(), rpy_true.y(),
-                                        geometry::wrapAngle(yaw + d.z()));
+                                        t.y() + std::sin(yaw) * d.x() + std::cos(yaw) * d.y(), T_true.translation().z(),
+                                        rpy_true.x(), rpy_true.y(), geometry::wrapAngle(yaw + d.z()));
     }
     ScanInput in;
     in.T_world_vehicle_odom = T_odom;

@@ -56,8 +56,9 @@ Scenario makeScenario(unsigned seed, int n) {
   const Eigen::LLT<Eigen::Matrix3d> odo_cov(odometryInformation().inverse());
   for (int i = 0; i + 1 < n; ++i) {
     const Eigen::Vector3d w(g(rng), g(rng), g(rng));
-    s.odometry.push_back(planarOdometry(s.truth[static_cast<std::size_t>(i)], s.truth[static_cast<std::size_t>(i) + 1]) +
-                         odo_cov.matrixL() * w);
+    s.odometry.push_back(
+        planarOdometry(s.truth[static_cast<std::size_t>(i)], s.truth[static_cast<std::size_t>(i) + 1]) +
+        odo_cov.matrixL() * w);
   }
   for (int i = 0; i < n; ++i) {
     const Vector6d x = toXyzRpy(s.truth[static_cast<std::size_t>(i)]);
@@ -88,8 +89,8 @@ PoseGraph buildGraph(const Scenario& s, const PoseGraphConfig& config) {
   auto graph = PoseGraph::create(config);
   EXPECT_TRUE(graph.ok());
   PoseGraph g = std::move(*graph);
-  const Eigen::Matrix3d abs_info = Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp),
-                                                   1 / (kSigmaRp * kSigmaRp)).asDiagonal();
+  const Eigen::Matrix3d abs_info =
+      Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp), 1 / (kSigmaRp * kSigmaRp)).asDiagonal();
   for (std::size_t i = 0; i < s.truth.size(); ++i) {
     EXPECT_TRUE(g.addNode(static_cast<NodeId>(i), s.dead_reckoning[i]).ok());
     EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], abs_info).ok());

@@ -39,7 +39,9 @@ SubmapBuilderConfig looseConfig() {
   return c;
 }
 
-geometry::Pose3 poseAt(double x, double yaw_deg) { return geometry::poseFromXyzRpy(x, -5.0, -2.0, 0, 0, deg2rad(yaw_deg)); }
+geometry::Pose3 poseAt(double x, double yaw_deg) {
+  return geometry::poseFromXyzRpy(x, -5.0, -2.0, 0, 0, deg2rad(yaw_deg));
+}
 
 TEST(SubmapBuilder, ClosesOnScanCountWhenTheNextScanArrives) {
   SubmapBuilderConfig c = looseConfig();

@@ -62,11 +62,12 @@ struct Bench {
     world = loadPilings();
     // The sonar receiver binds first so the vehicle can be told its port.
     io::UdpReceiverConfig uc;
-    sonar_rx = std::make_unique<io::UdpReceiver>(ioc, uc, clock(), [this](std::span<const std::uint8_t> d, std::int64_t) {
-      auto r = sonar::SonarUdpCodec{}.decode(d);
-      if (!r.isFrame()) return;
-      if (auto frame = reassembler.add(r.frame())) compareFrame(*frame);
-    });
+    sonar_rx =
+        std::make_unique<io::UdpReceiver>(ioc, uc, clock(), [this](std::span<const std::uint8_t> d, std::int64_t) {
+          auto r = sonar::SonarUdpCodec{}.decode(d);
+          if (!r.isFrame()) return;
+          if (auto frame = reassembler.add(r.frame())) compareFrame(*frame);
+        });
     nav::DeadReckoningConfig nc;
     nc.imu_max_gap_s = 0.5;  // scheduling jitter on a loaded machine is multiplied by the speedup
     nc.imu_timeout_s = 0.5;
@@ -108,7 +109,8 @@ struct Bench {
     if (!test::pumpUntil(ioc, [&] { return sonar_rx->localPort() != 0; }))
       return ::testing::AssertionFailure() << "udp bind";
     config.sonar_port = sonar_rx->localPort();
-    auto v = SimVehicle::create(*world, config, [](const std::string& e) { std::fprintf(stderr, "vehicle: %s\n", e.c_str()); });
+    auto v = SimVehicle::create(*world, config,
+                                [](const std::string& e) { std::fprintf(stderr, "vehicle: %s\n", e.c_str()); });
     if (!v) return ::testing::AssertionFailure() << v.error().message;
     vehicle = std::move(v).value();
     if (Status st = vehicle->start(); !st) return ::testing::AssertionFailure() << st.error().message;
@@ -119,37 +121,40 @@ struct Bench {
     dc.device_path = endpoints.dvl_device;
     dc.baud = endpoints.dvl_baud;
     dc.reconnect = reconnect;
-    dvl_port = std::make_unique<io::SerialTransport>(ioc, dc, clock(), [this](std::span<const std::uint8_t> b, std::int64_t t) {
-      pd0.feed(b);
-      while (auto e = pd0.next()) {
-        // The ensemble's own real-time clock (10 ms resolution; the simulated DVL pings every
-        // 200 ms, so it is exact) rather than the reception time: the integration interval of
-        // dead reckoning then does not depend on this machine's scheduling.
-        auto rtc = dvl::clockToUnixNs(e->variable.clock);
-        e->stamp_ns = rtc ? *rtc - endpoints.epoch_unix_ns : t;
-        ++dvl_n;
-        last_dvl_stamp_ns = e->stamp_ns;
-        if (dr->addDvl(*e).ok()) ++dvl_used;
-      }
-    });
+    dvl_port = std::make_unique<io::SerialTransport>(ioc, dc, clock(),
+                                                     [this](std::span<const std::uint8_t> b, std::int64_t t) {
+                                                       pd0.feed(b);
+                                                       while (auto e = pd0.next()) {
+                                                         // The ensemble's own real-time clock (10 ms resolution; the
+                                                         // simulated DVL pings every 200 ms, so it is exact) rather
+                                                         // than the reception time: the integration interval of dead
+                                                         // reckoning then does not depend on this machine's scheduling.
+                                                         auto rtc = dvl::clockToUnixNs(e->variable.clock);
+                                                         e->stamp_ns = rtc ? *rtc - endpoints.epoch_unix_ns : t;
+                                                         ++dvl_n;
+                                                         last_dvl_stamp_ns = e->stamp_ns;
+                                                         if (dr->addDvl(*e).ok()) ++dvl_used;
+                                                       }
+                                                     });
     io::SerialConfig qc;
     qc.device_path = endpoints.depth_device;
     qc.baud = endpoints.depth_baud;
     qc.reconnect = reconnect;
-    depth_port = std::make_unique<io::SerialTransport>(ioc, qc, clock(), [this](std::span<const std::uint8_t> b, std::int64_t t) {
-      dq.feed(b);
-      while (auto m = dq.next()) {
-        depth::DepthConversionConfig conv;
-        conv.units_code = endpoints.depth_units_code;
-        conv.latitude_deg = endpoints.depth_latitude_deg;
-        conv.atmospheric_pressure_pa = endpoints.depth_atmospheric_pressure_pa;
-        conv.reading_is_absolute = endpoints.depth_reading_is_absolute;
-        auto s = depth::toDepthSample(*m, conv, t);
-        if (!s) continue;
-        depths.push_back({t, s->depth_m});
-        (void)dr->addDepth(*s);
-      }
-    });
+    depth_port = std::make_unique<io::SerialTransport>(
+        ioc, qc, clock(), [this](std::span<const std::uint8_t> b, std::int64_t t) {
+          dq.feed(b);
+          while (auto m = dq.next()) {
+            depth::DepthConversionConfig conv;
+            conv.units_code = endpoints.depth_units_code;
+            conv.latitude_deg = endpoints.depth_latitude_deg;
+            conv.atmospheric_pressure_pa = endpoints.depth_atmospheric_pressure_pa;
+            conv.reading_is_absolute = endpoints.depth_reading_is_absolute;
+            auto s = depth::toDepthSample(*m, conv, t);
+            if (!s) continue;
+            depths.push_back({t, s->depth_m});
+            (void)dr->addDepth(*s);
+          }
+        });
     io::CanConfig cc;
     cc.unix_seqpacket = endpoints.imu_unix_seqpacket;
     cc.reconnect = reconnect;
@@ -164,27 +169,31 @@ struct Bench {
     io::TcpClientConfig tc;
     tc.port = endpoints.backseat_port;
     tc.reconnect = reconnect;
-    backseat_port = std::make_unique<io::TcpClient>(ioc, tc, clock(), [this](std::span<const std::uint8_t> b, std::int64_t t) {
-      bs.feed(b);
-      while (auto s = bs.next()) {
-        if (auto* nvg = std::get_if<backseat::NavSentence>(&*s)) {
-          nvg->stamp_ns = t;
-          last_nvg = *nvg;
-          ++nvg_n;
-        } else if (auto* ack = std::get_if<backseat::AckSentence>(&*s)) {
-          acks.push_back(*ack);
-          (void)tracker.onAck(*ack);
-        }
-      }
-    });
+    backseat_port =
+        std::make_unique<io::TcpClient>(ioc, tc, clock(), [this](std::span<const std::uint8_t> b, std::int64_t t) {
+          bs.feed(b);
+          while (auto s = bs.next()) {
+            if (auto* nvg = std::get_if<backseat::NavSentence>(&*s)) {
+              nvg->stamp_ns = t;
+              last_nvg = *nvg;
+              ++nvg_n;
+            } else if (auto* ack = std::get_if<backseat::AckSentence>(&*s)) {
+              acks.push_back(*ack);
+              (void)tracker.onAck(*ack);
+            }
+          }
+        });
     for (Status st : {dvl_port->start(), depth_port->start(), imu_port->start(), backseat_port->start()}) {
       if (!st) return ::testing::AssertionFailure() << st.error().message;
     }
-    if (!test::pumpUntil(ioc, [&] {
-          return depth_port->health().state == io::LinkState::kConnected && imu_n > 0 && dvl_n > 0 && nvg_n > 0;
-        }, 5000ms))
-      return ::testing::AssertionFailure() << "devices did not come up: dvl " << dvl_n << " imu " << imu_n << " nvg "
-                                           << nvg_n;
+    if (!test::pumpUntil(
+            ioc,
+            [&] {
+              return depth_port->health().state == io::LinkState::kConnected && imu_n > 0 && dvl_n > 0 && nvg_n > 0;
+            },
+            5000ms))
+      return ::testing::AssertionFailure()
+             << "devices did not come up: dvl " << dvl_n << " imu " << imu_n << " nvg " << nvg_n;
     const std::string p4 = depth::encodeCommand(1, 0, "P4");  // continuous readings
     if (Status st = depth_port->write(std::vector<std::uint8_t>(p4.begin(), p4.end())); !st)
       return ::testing::AssertionFailure() << st.error().message;
@@ -196,12 +205,14 @@ struct Bench {
   // Truth at a receiver stamp, once the simulation has stepped past it (reception stamps can run
   // a step ahead of the newest simulated state).
   Result<sim::VehicleState> truthAt(std::int64_t stamp_ns) {
-    (void)test::pumpUntil(ioc, [&] { return vehicle->simStampNs() >= stamp_ns; }, 1000ms);
+    (void)test::pumpUntil(
+        ioc, [&] { return vehicle->simStampNs() >= stamp_ns; }, 1000ms);
     return vehicle->truthAt(stamp_ns);
   }
 
   bool runUntilSim(std::int64_t stamp_ns, std::chrono::milliseconds timeout = 10s) {
-    return test::pumpUntil(ioc, [&] { return now() >= stamp_ns; }, timeout);
+    return test::pumpUntil(
+        ioc, [&] { return now() >= stamp_ns; }, timeout);
   }
 
   // Sends $BPGHP to the world point (x, y, z) through the tracker; returns the sentence's id.
@@ -278,7 +289,8 @@ TEST(SimVehicleTest, RealDriversDecodeEveryDeviceAndDeadReckoningTracksTruth) {
   Bench b(5.0);
   ASSERT_TRUE(b.start());
   // Dead reckoning starts at the true start position (as vogd's mission starts at a known pose).
-  ASSERT_TRUE(test::pumpUntil(b.ioc, [&] { return b.dr->solution(b.now()).initialized; }, 5000ms));
+  ASSERT_TRUE(test::pumpUntil(
+      b.ioc, [&] { return b.dr->solution(b.now()).initialized; }, 5000ms));
   b.dr->resetPosition(b.endpoints.start_xyz_world.x(), b.endpoints.start_xyz_world.y());
 
   const Eigen::Vector3d first(-4.0, -1.0, -2.0), second(-1.5, -1.0, -2.0);
@@ -293,7 +305,8 @@ TEST(SimVehicleTest, RealDriversDecodeEveryDeviceAndDeadReckoningTracksTruth) {
   std::uint32_t id2 = 0;
   const std::int64_t end_ns = 30'000'000'000;
   while (b.now() < end_ns) {
-    ASSERT_TRUE(test::pumpUntil(b.ioc, [&] { return b.dvl_n > last_dvl_seen || b.now() >= end_ns; }, 3000ms));
+    ASSERT_TRUE(test::pumpUntil(
+        b.ioc, [&] { return b.dvl_n > last_dvl_seen || b.now() >= end_ns; }, 3000ms));
     last_dvl_seen = b.dvl_n;
     const nav::NavSolution sol = b.dr->solution(b.last_dvl_stamp_ns);
     auto truth = b.truthAt(b.last_dvl_stamp_ns);
@@ -392,11 +405,15 @@ TEST(SimVehicleTest, NewCommandReplacesTargetAndBadTargetIsRefused) {
   EXPECT_EQ(b.ackOf(id3)->status, backseat::AckStatus::kFailed);
   EXPECT_NE(b.ackOf(id3)->reason.find("outside the operating area"), std::string::npos) << b.ackOf(id3)->reason;
   double max_y = y_before;
-  ASSERT_TRUE(test::pumpUntil(b.ioc, [&] {
-    const auto s = b.vehicle->snapshot();
-    max_y = std::max(max_y, s.truth.xyz_world.y());
-    return (s.truth.xyz_world - b.expected[id2]).norm() < 0.02;
-  }, 5000ms)) << "did not reach the replacing target";
+  ASSERT_TRUE(test::pumpUntil(
+      b.ioc,
+      [&] {
+        const auto s = b.vehicle->snapshot();
+        max_y = std::max(max_y, s.truth.xyz_world.y());
+        return (s.truth.xyz_world - b.expected[id2]).norm() < 0.02;
+      },
+      5000ms))
+      << "did not reach the replacing target";
   // Never went on to the replaced target (queued semantics would have reached y = 0.93 first).
   EXPECT_LT(max_y, b.expected[id1].y() - 0.2);
   const VehicleSnapshot s = b.vehicle->snapshot();
@@ -431,14 +448,19 @@ TEST(SimVehicleTest, InjectedGarbageAndUnplugsAreSurvived) {
            b.imu_port->health().state != io::LinkState::kConnected &&
            b.backseat_port->health().state != io::LinkState::kConnected;
   })) << "the unplugs were not seen";
-  ASSERT_TRUE(test::pumpUntil(b.ioc, [&] {
-    return b.dvl_port->health().connects >= 2 && b.imu_port->health().connects >= 2 &&
-           b.backseat_port->health().connects >= 2;
-  }, 5000ms)) << "the transports did not reconnect";
+  ASSERT_TRUE(test::pumpUntil(
+      b.ioc,
+      [&] {
+        return b.dvl_port->health().connects >= 2 && b.imu_port->health().connects >= 2 &&
+               b.backseat_port->health().connects >= 2;
+      },
+      5000ms))
+      << "the transports did not reconnect";
   before = b.dvl_n;
   const std::uint64_t imu_before = b.imu_n, nvg_before = b.nvg_n;
-  ASSERT_TRUE(test::pumpUntil(b.ioc, [&] { return b.dvl_n >= before + 5 && b.imu_n >= imu_before + 50 && b.nvg_n >= nvg_before + 5; }))
-      << "decoding did not resume";
+  ASSERT_TRUE(test::pumpUntil(b.ioc, [&] {
+    return b.dvl_n >= before + 5 && b.imu_n >= imu_before + 50 && b.nvg_n >= nvg_before + 5;
+  })) << "decoding did not resume";
   // And the backseat link still carries commands.
   const std::uint32_t id = b.goTo(Eigen::Vector3d(-4.5, 0.0, -1.5));
   ASSERT_TRUE(test::pumpUntil(b.ioc, [&] { return b.ackOf(id).has_value(); }));

@@ -29,11 +29,11 @@ TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
   test::TempDir dir("vog-vogsim");
   const auto endpoints_file = dir.path() / "endpoints.yaml";
   const auto control = dir.path() / "control.sock";
-  test::Subprocess child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(),
-                          "--seed", "3", "--speedup", "10", "--run-dir", dir.path().string(), "--endpoints",
-                          endpoints_file.string(), "--backseat-port", "0", "--sonar-port", "0", "--control",
-                          control.string(), "--no-stdin"},
-                         {}, dir.path() / "vogsim.log");
+  test::Subprocess child(
+      {VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(), "--seed", "3",
+       "--speedup", "10", "--run-dir", dir.path().string(), "--endpoints", endpoints_file.string(), "--backseat-port",
+       "0", "--sonar-port", "0", "--control", control.string(), "--no-stdin"},
+      {}, dir.path() / "vogsim.log");
   ASSERT_TRUE(child.started());
 
   const auto deadline = std::chrono::steady_clock::now() + 10s;
@@ -95,9 +95,10 @@ TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
 
 TEST(VogsimProcessTest, BadArgumentsFailWithoutStarting) {
   test::TempDir dir("vog-vogsim");
-  test::Subprocess child({VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(),
-                          "--speedup", "0", "--run-dir", dir.path().string(), "--no-stdin"},
-                         {}, dir.path() / "vogsim.log");
+  test::Subprocess child(
+      {VOGSIM_PATH, "vehicle", "--scene", (test::sourceDir() / "config/scenes/pilings.yaml").string(), "--speedup", "0",
+       "--run-dir", dir.path().string(), "--no-stdin"},
+      {}, dir.path() / "vogsim.log");
   const int st = child.wait(10.0);
   ASSERT_NE(st, -1);
   EXPECT_NE(st, 0);

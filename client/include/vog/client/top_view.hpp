@@ -23,8 +23,8 @@ inline constexpr std::array<std::uint8_t, 3> kFreeColour = {128, 128, 128};
 std::array<std::uint8_t, 3> heightColour(double t);
 
 struct TopViewConfig {
-  double px_per_m = 0.0;     // 0: one pixel per voxel (1 / resolution)
-  int max_side_px = 16384;   // larger images are refused (a typo in px_per_m, not a map)
+  double px_per_m = 0.0;    // 0: one pixel per voxel (1 / resolution)
+  int max_side_px = 16384;  // larger images are refused (a typo in px_per_m, not a map)
 
   // Names the key and bad value.
   Status validate() const;

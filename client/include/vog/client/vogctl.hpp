@@ -39,8 +39,8 @@ struct ConnectionOptions {
   std::uint16_t port = kDefaultApiPort;
   std::string secret_file;  // when set: authenticate as operator
   int timeout_ms = 10000;
-  bool tls = false;         // TLS (vogd's api.tls), the server verified against ca_file
-  std::string ca_file;      // PEM; empty: the system's trusted CAs
+  bool tls = false;     // TLS (vogd's api.tls), the server verified against ca_file
+  std::string ca_file;  // PEM; empty: the system's trusted CAs
 
   void addTo(CLI::App& cmd);
 };

@@ -16,9 +16,7 @@ namespace vog {
 
 using Bytes = std::span<const std::uint8_t>;
 
-inline std::uint16_t readU16LE(Bytes b, std::size_t at) {
-  return static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8));
-}
+inline std::uint16_t readU16LE(Bytes b, std::size_t at) { return static_cast<std::uint16_t>(b[at] | (b[at + 1] << 8)); }
 inline std::int16_t readI16LE(Bytes b, std::size_t at) { return static_cast<std::int16_t>(readU16LE(b, at)); }
 inline std::uint32_t readU32LE(Bytes b, std::size_t at) {
   return static_cast<std::uint32_t>(b[at]) | (static_cast<std::uint32_t>(b[at + 1]) << 8) |
@@ -84,9 +82,7 @@ inline void writeF32LE(std::span<std::uint8_t> b, std::size_t at, float v) {
   writeU32LE(b, at, std::bit_cast<std::uint32_t>(v));
 }
 
-inline Bytes asBytes(std::string_view s) {
-  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
-}
+inline Bytes asBytes(std::string_view s) { return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()}; }
 
 // Reads fields in order; the first read past the end sets an error naming the field and every later
 // read returns zero, so a decoder checks `ok()` once at the end.

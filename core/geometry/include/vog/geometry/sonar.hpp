@@ -19,11 +19,11 @@ constexpr double deg2rad(double deg) { return deg * std::numbers::pi / 180.0; }
 constexpr double rad2deg(double rad) { return rad * 180.0 / std::numbers::pi; }
 
 struct SonarFan {
-  int n_beams = 96;                         // thesis 4.1
-  double fov_rad = deg2rad(29.0);           // thesis 4.1
-  double spread_rad = deg2rad(1.0);         // thesis 4.1, concentrator lens
+  int n_beams = 96;                  // thesis 4.1
+  double fov_rad = deg2rad(29.0);    // thesis 4.1
+  double spread_rad = deg2rad(1.0);  // thesis 4.1, concentrator lens
   double min_range_m = 0.5;
-  double max_range_m = 11.0;                // thesis Table 4.2 (sensor d_max)
+  double max_range_m = 11.0;                                              // thesis Table 4.2 (sensor d_max)
   Pose3 T_vehicle_sensor = poseFromXyzRpy(0, 0, 0, deg2rad(90.0), 0, 0);  // fan vertical
 
   // Names the first bad field, or is ok.

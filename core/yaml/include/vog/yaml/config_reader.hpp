@@ -60,7 +60,8 @@ class ConfigMap {
 
  private:
   friend class ConfigReader;
-  ConfigMap(ConfigReader* reader, YAML::Node node, std::string path) : reader_(reader), node_(node), path_(std::move(path)) {}
+  ConfigMap(ConfigReader* reader, YAML::Node node, std::string path)
+      : reader_(reader), node_(node), path_(std::move(path)) {}
   std::optional<YAML::Node> get(const std::string& key);
 
   ConfigReader* reader_;

@@ -43,12 +43,12 @@ struct ApiServerConfig {
   DispatchConfig dispatch;
   TlsServerConfig tls;  // disabled when no certificate is given
   std::size_t max_clients = 64;
-  std::size_t max_in_flight = 16;          // requests whose replies are not yet handed to the socket
-  double max_requests_per_s = 200.0;       // token bucket refill rate per client
-  double request_burst = 400.0;            // token bucket size per client
-  std::size_t max_queued_responses = 256;  // unsent response frames per client before a disconnect
-  std::size_t max_queued_waypoints = 64;   // per client; the oldest is dropped beyond
-  int socket_send_buffer_bytes = 0;        // SO_SNDBUF of client sockets; 0 keeps the OS default
+  std::size_t max_in_flight = 16;                 // requests whose replies are not yet handed to the socket
+  double max_requests_per_s = 200.0;              // token bucket refill rate per client
+  double request_burst = 400.0;                   // token bucket size per client
+  std::size_t max_queued_responses = 256;         // unsent response frames per client before a disconnect
+  std::size_t max_queued_waypoints = 64;          // per client; the oldest is dropped beyond
+  int socket_send_buffer_bytes = 0;               // SO_SNDBUF of client sockets; 0 keeps the OS default
   std::chrono::milliseconds close_timeout{1000};  // a closing client gets this long to read its error
 
   // Names the first bad key and value.
@@ -56,14 +56,14 @@ struct ApiServerConfig {
 };
 
 struct ApiServerStats {
-  std::uint64_t clients = 0;               // connected now
+  std::uint64_t clients = 0;  // connected now
   std::uint64_t accepted = 0;
-  std::uint64_t refused_full = 0;          // refused: max_clients reached
-  std::uint64_t protocol_errors = 0;       // disconnects for malformed/oversize/unknown frames
-  std::uint64_t tls_failures = 0;          // TLS handshakes that failed or timed out
-  std::uint64_t slow_disconnects = 0;      // disconnects for unread responses
-  std::uint64_t stream_drops = 0;          // stream messages dropped or coalesced, all clients
-  std::uint64_t waypoint_drops = 0;        // of which waypoints (poses and status are coalesced)
+  std::uint64_t refused_full = 0;      // refused: max_clients reached
+  std::uint64_t protocol_errors = 0;   // disconnects for malformed/oversize/unknown frames
+  std::uint64_t tls_failures = 0;      // TLS handshakes that failed or timed out
+  std::uint64_t slow_disconnects = 0;  // disconnects for unread responses
+  std::uint64_t stream_drops = 0;      // stream messages dropped or coalesced, all clients
+  std::uint64_t waypoint_drops = 0;    // of which waypoints (poses and status are coalesced)
   std::uint64_t waypoints_published = 0;
   std::uint64_t requests = 0;
 };

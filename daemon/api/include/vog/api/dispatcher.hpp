@@ -33,9 +33,9 @@ struct DispatchConfig {
 
 // What one connection has established. Owned by its session, changed only by Dispatcher::handle.
 struct SessionState {
-  std::string peer;                   // "address:port", for logs
+  std::string peer;  // "address:port", for logs
   Role role = Role::kObserver;
-  std::string pending_server_nonce;   // set by Hello, consumed by the next ChallengeResponse
+  std::string pending_server_nonce;  // set by Hello, consumed by the next ChallengeResponse
   Subscriptions subscriptions;
 };
 

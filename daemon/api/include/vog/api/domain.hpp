@@ -71,7 +71,7 @@ struct Waypoint {
   std::int64_t stamp_ns = 0;
   geometry::Pose3 T_world_target = geometry::Pose3::Identity();
   double speed_mps = 0.0;
-  std::uint64_t dropped = 0;  // filled on the client side: waypoints this session lost so far
+  std::uint64_t dropped = 0;           // filled on the client side: waypoints this session lost so far
   std::int64_t published_unix_ns = 0;  // set by ApiServer::publishWaypoint: its wall clock (Unix ns)
 };
 

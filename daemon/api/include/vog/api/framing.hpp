@@ -45,9 +45,7 @@ class FrameDecoder {
   explicit FrameDecoder(std::uint32_t max_payload_bytes);
 
   void feed(std::span<const std::uint8_t> bytes);
-  void feed(std::string_view bytes) {
-    feed({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()});
-  }
+  void feed(std::string_view bytes) { feed({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}); }
   FrameResult next();
 
   bool failed() const { return failed_; }

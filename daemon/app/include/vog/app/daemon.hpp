@@ -112,36 +112,36 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   // Components.
   std::unique_ptr<mission::MissionStore> store_;
-  std::unique_ptr<RawRecorder> raw_;                  // the raw log (its own lock)
-  std::atomic<bool> mapping_enabled_{false};           // the mission is exploring, returning or paused
-  bool chunk_gate_ = false;                           // source thread: the gate of the chunk being decoded
-  std::unique_ptr<slam::MappingPipeline> pipeline_;   // mapping thread
+  std::unique_ptr<RawRecorder> raw_;                 // the raw log (its own lock)
+  std::atomic<bool> mapping_enabled_{false};         // the mission is exploring, returning or paused
+  bool chunk_gate_ = false;                          // source thread: the gate of the chunk being decoded
+  std::unique_ptr<slam::MappingPipeline> pipeline_;  // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
   std::optional<explore::ExplorationController> controller_;  // planning thread
   std::unique_ptr<VehicleSource> source_;
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
 
-  ScanQueue scans_{256};                               // source -> mapping (its own lock)
+  ScanQueue scans_{256};  // source -> mapping (its own lock)
 
   // Shared state, guarded by state_mutex_.
   mutable std::mutex state_mutex_;
   std::condition_variable planner_cv_;
   mission::MissionControl mission_;
-  bool mission_started_ = false;           // the controller must (re)start for a new mission
-  bool hold_requested_ = false;            // a command stopped the vehicle; the controller plans again
-  std::uint64_t commands_ = 0;             // mission commands accepted (a step's waypoints older than one are dropped)
+  bool mission_started_ = false;  // the controller must (re)start for a new mission
+  bool hold_requested_ = false;   // a command stopped the vehicle; the controller plans again
+  std::uint64_t commands_ = 0;    // mission commands accepted (a step's waypoints older than one are dropped)
   api::PlannerState planner_state_ = api::PlannerState::kIdle;
-  SourceAlignment alignment_;                          // a resumed source's frame and clock
-  bool have_odometry_ = false;                         // a sample arrived since launch
-  OdometrySample odometry_;                            // newest, aligned
+  SourceAlignment alignment_;   // a resumed source's frame and clock
+  bool have_odometry_ = false;  // a sample arrived since launch
+  OdometrySample odometry_;     // newest, aligned
   geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
   std::shared_ptr<const std::vector<api::SubmapInfo>> submap_infos_;
   std::uint32_t n_closures_ = 0;
   // What the revisit policy reads (copies published by the mapping thread).
   std::shared_ptr<const std::vector<slam::SubmapRecord>> submap_records_;
   std::shared_ptr<const std::vector<slam::ClosurePair>> closure_pairs_;
-  mutable std::shared_ptr<const api::Cloud> cloud_;   // cache for the snapshot version below
+  mutable std::shared_ptr<const api::Cloud> cloud_;  // cache for the snapshot version below
   mutable std::uint64_t cloud_version_ = 0;
   std::optional<Error> failure_;
   std::uint64_t mapping_errors_ = 0;

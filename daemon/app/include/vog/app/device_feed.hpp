@@ -48,7 +48,13 @@
 namespace vog::app {
 
 // Raw-log device ids of the device backend (the simulator's records use 0x01xx, scan_record.hpp).
-enum class DeviceId : std::uint16_t { kDvl = 0x0001, kDepth = 0x0002, kImu = 0x0003, kSonar = 0x0004, kBackseat = 0x0005 };
+enum class DeviceId : std::uint16_t {
+  kDvl = 0x0001,
+  kDepth = 0x0002,
+  kImu = 0x0003,
+  kSonar = 0x0004,
+  kBackseat = 0x0005
+};
 inline constexpr std::array<DeviceId, 5> kAllDevices = {DeviceId::kDvl, DeviceId::kDepth, DeviceId::kImu,
                                                         DeviceId::kSonar, DeviceId::kBackseat};
 const char* toString(DeviceId device);
@@ -64,9 +70,9 @@ struct DeviceFeedConfig {
   sonar::RangeExtractionConfig range_extraction;
   nav::DeadReckoningConfig nav;
   NavigationSource navigation = NavigationSource::kDeadReckoning;
-  bool align_to_vehicle = true;  // dead reckoning starts at the first $BFNVG position
+  bool align_to_vehicle = true;            // dead reckoning starts at the first $BFNVG position
   backseat::GeoPoint origin{42.0, -71.0};  // world (0, 0) of the backseat's latitude/longitude
-  int n_beams = 96;               // the mapping's fan; a frame with another beam count is refused
+  int n_beams = 96;                        // the mapping's fan; a frame with another beam count is refused
   // kBackseat: a ping up to this long after the newest $BFNVG is extrapolated with $BFNVR's velocity.
   double backseat_max_extrapolation_s = 0.5;
 
@@ -90,9 +96,9 @@ struct FeedOutput {
 };
 
 struct DeviceCounters {
-  std::uint64_t chunks = 0;     // feed() calls
-  std::uint64_t messages = 0;   // decoded frames / sentences / samples
-  std::uint64_t rejected = 0;   // decoded but refused (bad frame, dead reckoning rejection, ...)
+  std::uint64_t chunks = 0;    // feed() calls
+  std::uint64_t messages = 0;  // decoded frames / sentences / samples
+  std::uint64_t rejected = 0;  // decoded but refused (bad frame, dead reckoning rejection, ...)
   std::int64_t last_stamp_ns = -1;
   std::string last_error;
 };
@@ -136,7 +142,7 @@ class DeviceFeed {
   codec::StreamDecoder<backseat::BackseatCodec> backseat_;
   sonar::FrameReassembler reassembler_{8};
   std::array<DeviceCounters, kAllDevices.size()> counters_{};
-  std::deque<VehicleNavigation> vehicle_navigation_;  // the last two seconds of $BFNVG
+  std::deque<VehicleNavigation> vehicle_navigation_;                // the last two seconds of $BFNVG
   Eigen::Vector3d vehicle_velocity_mps_ = Eigen::Vector3d::Zero();  // newest $BFNVR
   bool aligned_ = false;
   std::int64_t last_odometry_ns_ = -1;

@@ -45,7 +45,7 @@ class DeviceSource final : public VehicleSource {
   bool idle() const override;
   std::vector<api::DeviceHealth> health() const override;
   std::uint64_t heartbeat() const override;
-  Status failure() const override { return {}; }  // devices fail and recover; health() says how
+  Status failure() const override { return {}; }                // devices fail and recover; health() says how
   std::optional<SourceObstruction> takeObstruction() override;  // a waypoint not reached in time
   bool persistentFrame() const override { return true; }
 

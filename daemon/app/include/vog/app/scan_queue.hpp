@@ -47,10 +47,10 @@ class ScanQueue {
   const std::size_t capacity_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<QueuedScan> queue_;     // guarded by mutex_
-  std::size_t unmapped_ = 0;         // pushed and not yet done(), guarded by mutex_
-  std::uint64_t not_mapped_ = 0;     // recorded only, guarded by mutex_
-  bool stopped_ = false;             // guarded by mutex_
+  std::deque<QueuedScan> queue_;  // guarded by mutex_
+  std::size_t unmapped_ = 0;      // pushed and not yet done(), guarded by mutex_
+  std::uint64_t not_mapped_ = 0;  // recorded only, guarded by mutex_
+  bool stopped_ = false;          // guarded by mutex_
 };
 
 }  // namespace vog::app

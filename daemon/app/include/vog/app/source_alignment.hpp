@@ -28,7 +28,8 @@ class SourceAlignment {
   SourceAlignment() = default;
   // A resumed mission: the vehicle at T_map_vehicle, the old odometry frame at T_map_oldodom in the
   // map, the newest mapped stamp last_stamp_ns.
-  SourceAlignment(const geometry::Pose3& T_map_vehicle, const geometry::Pose3& T_map_oldodom, std::int64_t last_stamp_ns)
+  SourceAlignment(const geometry::Pose3& T_map_vehicle, const geometry::Pose3& T_map_oldodom,
+                  std::int64_t last_stamp_ns)
       : resume_(Resume{T_map_vehicle, T_map_oldodom, last_stamp_ns}) {}
 
   // Fixes the alignment at the first sample after launch (later calls change nothing).

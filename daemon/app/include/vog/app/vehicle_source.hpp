@@ -35,7 +35,8 @@ class SourceSink {
   virtual void onOdometry(const OdometrySample& odometry) = 0;
   virtual bool onScan(const slam::ScanInput& scan, const std::optional<geometry::Pose3>& T_world_vehicle_true) = 0;
   // Bytes a device delivered, for the raw log, before they are decoded (device ids: device_feed.hpp).
-  virtual void onRawBytes(std::uint16_t /*device_id*/, std::int64_t /*stamp_ns*/, std::span<const std::uint8_t> /*bytes*/) {}
+  virtual void onRawBytes(std::uint16_t /*device_id*/, std::int64_t /*stamp_ns*/,
+                          std::span<const std::uint8_t> /*bytes*/) {}
 };
 
 struct SourceWaypoint {

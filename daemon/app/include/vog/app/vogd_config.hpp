@@ -40,7 +40,7 @@ struct MissionSection {
 struct SimSection {
   std::filesystem::path scene;  // resolved against the configuration file's folder
   std::uint64_t seed = 1;
-  double speedup = 20.0;        // simulated seconds per wall second; 0 = as fast as possible
+  double speedup = 20.0;               // simulated seconds per wall second; 0 = as fast as possible
   double odometry_noise_scale = 0.25;  // factor on the thesis Eq. 4.1 rates (random walk)
 };
 
@@ -71,7 +71,7 @@ struct ApiSection {
   std::uint16_t port = 29600;
   std::uint32_t max_frame_bytes = 4u << 20;
   int max_clients = 64;
-  std::filesystem::path secret_file;  // operator shared secret; empty: operator role disabled
+  std::filesystem::path secret_file;           // operator shared secret; empty: operator role disabled
   std::filesystem::path tls_certificate_file;  // PEM chain; set: every client speaks TLS
   std::filesystem::path tls_private_key_file;  // PEM
 };

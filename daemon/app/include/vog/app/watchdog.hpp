@@ -24,8 +24,8 @@ class Watchdog {
   void add(std::string name, std::function<std::uint64_t()> heartbeat, Clock::time_point now);
 
   struct Check {
-    bool alive = true;                        // every heartbeat changed within the stall limit
-    std::vector<std::string> newly_stalled;   // "name (N s)" of threads found stuck at this check
+    bool alive = true;                       // every heartbeat changed within the stall limit
+    std::vector<std::string> newly_stalled;  // "name (N s)" of threads found stuck at this check
   };
   // Reads every heartbeat at `now`. A stuck thread is reported once, and again after it has beaten
   // and stalled anew.

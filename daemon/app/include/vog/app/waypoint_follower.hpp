@@ -41,8 +41,8 @@ struct WaypointFollowerConfig {
   double arrival_tolerance_m = 0.15;
   double arrival_tolerance_rad = geometry::deg2rad(3.0);
   double arrival_max_speed_mps = 0.03;
-  double speed_mps = 0.25;              // thesis Table 4.2, v_max
-  double yaw_rate_radps = 0.15;         // thesis Table 4.2, psi (for the arrival timeout)
+  double speed_mps = 0.25;                 // thesis Table 4.2, v_max
+  double yaw_rate_radps = 0.15;            // thesis Table 4.2, psi (for the arrival timeout)
   double arrival_timeout_margin_s = 10.0;  // added to twice the time the move takes
   // False without a backseat link (the waypoints reach the vehicle's controller some other way,
   // e.g. the API's waypoint stream): commands are not tracked and arrival is judged on the
@@ -55,14 +55,13 @@ struct WaypointFollowerConfig {
 };
 
 struct FollowerStats {
-  std::uint64_t commands_sent = 0;   // first sends, not resends
+  std::uint64_t commands_sent = 0;  // first sends, not resends
   std::uint64_t resends = 0;
   std::uint64_t accepted = 0;
-  std::uint64_t refused = 0;         // refused or never acknowledged
+  std::uint64_t refused = 0;  // refused or never acknowledged
   std::uint64_t arrived = 0;
-  std::uint64_t timeouts = 0;        // not reached in time
+  std::uint64_t timeouts = 0;  // not reached in time
 };
-
 
 class WaypointFollower {
  public:
@@ -94,11 +93,11 @@ class WaypointFollower {
   backseat::LocalTangentPlane ltp_;
   backseat::AckTracker acks_;
   backseat::HeartbeatScheduler heartbeat_{config_.heartbeat_period_ns};
-  std::deque<SourceWaypoint> waypoints_;        // odometry frame; front = next or current
+  std::deque<SourceWaypoint> waypoints_;  // odometry frame; front = next or current
   bool front_commanded_ = false;
-  bool hold_pending_ = false;                   // an empty list arrived: command a hold once
-  std::optional<SourceWaypoint> target_;        // navigation frame of the command in force
-  std::int64_t deadline_ns_ = 0;                // the front waypoint counts as not reached after this
+  bool hold_pending_ = false;                    // an empty list arrived: command a hold once
+  std::optional<SourceWaypoint> target_;         // navigation frame of the command in force
+  std::int64_t deadline_ns_ = 0;                 // the front waypoint counts as not reached after this
   std::optional<std::uint32_t> outstanding_id_;  // sent, not yet acknowledged
   std::uint32_t next_id_ = 1;
   geometry::Pose3 T_nav_odom_ = geometry::Pose3::Identity();

@@ -73,11 +73,11 @@ struct Obstruction {
 };
 
 struct StepInput {
-  std::int64_t stamp_ns = 0;                                 // the newest odometry stamp
+  std::int64_t stamp_ns = 0;                                      // the newest odometry stamp
   geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();  // the estimate, map frame
-  bool vehicle_idle = false;                                 // every waypoint sent was reached
-  std::optional<Obstruction> obstruction;                    // since the last step
-  std::size_t n_submaps = 0;                                 // closed submaps
+  bool vehicle_idle = false;                                      // every waypoint sent was reached
+  std::optional<Obstruction> obstruction;                         // since the last step
+  std::size_t n_submaps = 0;                                      // closed submaps
   // The map to plan on, asked for only when the step plans (a caller in lockstep synchronises with
   // its merge there, vogd running as fast as possible lets its mapping catch up first): the newest
   // merged snapshot, null when nothing is merged yet (the step then waits), or the caller's error.
@@ -139,13 +139,13 @@ class ExplorationController {
   ExplorationConfig config_;
   std::unique_ptr<plan::NbvPlanner> planner_;
   std::optional<slam::RevisitPolicy> revisit_;
-  bool spin_pending_ = false;     // start() on an empty map: turn on the spot first
-  bool returning_ = false;        // on the way home (or about to plan it)
-  bool home_path_sent_ = false;   // the way home was handed to the vehicle
+  bool spin_pending_ = false;               // start() on an empty map: turn on the spot first
+  bool returning_ = false;                  // on the way home (or about to plan it)
+  bool home_path_sent_ = false;             // the way home was handed to the vehicle
   Ending home_ending_ = Ending::kComplete;  // what arriving home ends the mission as
   Ending ending_ = Ending::kNone;
   std::string reason_;
-  int idle_plans_ = 0;            // plans since the vehicle last moved
+  int idle_plans_ = 0;  // plans since the vehicle last moved
 };
 
 }  // namespace vog::explore

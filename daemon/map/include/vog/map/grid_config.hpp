@@ -27,17 +27,17 @@ struct LogOddsBounds {
 };
 
 struct GridConfig {
-  double resolution_m = 0.095;        // thesis Table 4.2
-  double prob_hit = 0.7;              // OctoMap default
-  double prob_miss = 0.4;             // OctoMap default
-  double clamp_min = 0.1192;          // OctoMap default clamping thresholds
+  double resolution_m = 0.095;  // thesis Table 4.2
+  double prob_hit = 0.7;        // OctoMap default
+  double prob_miss = 0.4;       // OctoMap default
+  double clamp_min = 0.1192;    // OctoMap default clamping thresholds
   double clamp_max = 0.971;
-  double occupancy_threshold = 0.5;   // occupied when P > threshold
-  double max_range_m = 11.0;          // beams integrate up to here; thesis Table 4.2 sensor d_max
+  double occupancy_threshold = 0.5;  // occupied when P > threshold
+  double max_range_m = 11.0;         // beams integrate up to here; thesis Table 4.2 sensor d_max
   // Downsampling of the cached occupied cloud (ICP input); 0 = the resolution. A profiling sonar sees
   // little of an object per submap, so registration needs every occupied voxel it has.
   double cloud_voxel_m = 0.0;
-  int normal_neighbours = 10;         // neighbours for the PCA normal of each cloud point
+  int normal_neighbours = 10;  // neighbours for the PCA normal of each cloud point
 
   // Names the first bad key and value, or is ok.
   Status validate() const;

@@ -23,7 +23,7 @@
 namespace octomap {
 class KeyRay;
 class OcTree;
-}
+}  // namespace octomap
 
 namespace vog::map {
 

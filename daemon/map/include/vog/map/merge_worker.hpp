@@ -31,7 +31,7 @@ namespace vog::map {
 struct MergeRecord {
   std::uint64_t sequence = 0;  // of the submitted set (1, 2, ...)
   std::size_t n_submaps = 0;
-  double merge_ms = 0.0;       // wall time of sync() + snapshot()
+  double merge_ms = 0.0;  // wall time of sync() + snapshot()
   SyncStats stats;
 };
 
@@ -67,8 +67,8 @@ class MergeWorker {
   const MergeConfig config_;
   std::unique_ptr<MergedMap> merged_;  // merge thread only
   mutable std::mutex mutex_;
-  std::condition_variable wake_;       // work arrived or stop
-  std::condition_variable idle_;       // a merge finished
+  std::condition_variable wake_;                     // work arrived or stop
+  std::condition_variable idle_;                     // a merge finished
   std::optional<std::vector<SubmapEntry>> pending_;  // guarded by mutex_
   std::uint64_t submitted_ = 0;                      // guarded by mutex_
   std::uint64_t merged_sequence_ = 0;                // guarded by mutex_

@@ -5,8 +5,8 @@
 // centre, and how many submaps know it (0 = unknown), packed in one int64: sum in fixed point
 // (2^-28 log-odds) times 2^16, plus the count. A submap's contribution is one integer addition of
 // (value << 16) + 1, so adding and removing a submap are exact inverses (an incrementally maintained
-// map is bit-identical to one merged from scratch), and a lookup touches one cache line. Values are clamped at query time (OctoMap would clamp on
-// every update, which breaks removal).
+// map is bit-identical to one merged from scratch), and a lookup touches one cache line. Values are clamped at query
+// time (OctoMap would clamp on every update, which breaks removal).
 //
 // Merging a submap evaluates it at global voxel centres (never scatters its voxels: rotations alias):
 // for every leaf of the submap's tree, the global centres inside the leaf's rotated box get the leaf's
@@ -62,7 +62,7 @@ class MergedMap {
   static constexpr int kBlockSide = 1 << kBlockBits;
   static constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
   static constexpr double kFixedScale = 268435456.0;  // 2^28 fixed-point units per log-odds
-  static constexpr int kCountBits = 16;                 // up to 65535 submaps know one voxel
+  static constexpr int kCountBits = 16;               // up to 65535 submaps know one voxel
   // 47 bits of sum magnitude at 2^-28 hold +-524288 log-odds: 65535 submaps at the clamping bound.
 
   struct Block {
@@ -154,7 +154,7 @@ class MergedMap {
   double inv_resolution_;
   BlockTable<Block> blocks_;
   std::unordered_map<std::uint64_t, std::uint64_t> removed_;  // packed block -> version it was erased at
-  std::map<SubmapId, SubmapEntry> merged_;  // each submap at the pose it was merged at
+  std::map<SubmapId, SubmapEntry> merged_;                    // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
   std::uint64_t writer_id_ = 0;
 };
@@ -165,8 +165,8 @@ void MergedMap::forEachKnown(F&& f) const {
     const VoxelKey base = unpackBlock(packed) * kBlockSide;
     for (int i = 0; i < kBlockVoxels; ++i) {
       if (block->count(static_cast<std::size_t>(i)) == 0) continue;
-      const VoxelKey key = base + VoxelKey(i & (kBlockSide - 1), (i >> kBlockBits) & (kBlockSide - 1),
-                                           i >> (2 * kBlockBits));
+      const VoxelKey key =
+          base + VoxelKey(i & (kBlockSide - 1), (i >> kBlockBits) & (kBlockSide - 1), i >> (2 * kBlockBits));
       f(key, valueOf(*block, i));
     }
   });

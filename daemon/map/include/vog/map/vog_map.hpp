@@ -49,7 +49,7 @@ struct LineSample {
 
 // Result of a visibility cast: samples up to and including the first occupied one.
 struct CastResult {
-  bool hit = false;                 // an occupied sample was reached within the range
+  bool hit = false;  // an occupied sample was reached within the range
   Eigen::Vector3d hit_world = Eigen::Vector3d::Zero();
   int n_free = 0;
   int n_unknown = 0;

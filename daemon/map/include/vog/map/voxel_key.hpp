@@ -81,7 +81,9 @@ struct KeyBox {
   VoxelKey max = VoxelKey::Constant(0);
 
   bool empty() const { return (min.array() > max.array()).any(); }
-  bool contains(const VoxelKey& k) const { return (k.array() >= min.array()).all() && (k.array() <= max.array()).all(); }
+  bool contains(const VoxelKey& k) const {
+    return (k.array() >= min.array()).all() && (k.array() <= max.array()).all();
+  }
   void extend(const VoxelKey& lo, const VoxelKey& hi) {
     if (empty()) {
       min = lo;

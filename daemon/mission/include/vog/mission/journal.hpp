@@ -97,7 +97,7 @@ struct JournalEntry {
 
 struct JournalContents {
   std::vector<JournalEntry> entries;
-  TailRecovery tail;         // a torn last record, discarded
+  TailRecovery tail;  // a torn last record, discarded
   std::uint64_t good_end = 0;
 };
 

@@ -38,12 +38,12 @@
 namespace vog::mission {
 
 struct MissionResume {
-  slam::PipelineState pipeline;               // committed submaps, closures, current estimates
-  std::optional<MissionStateRecord> state;    // last mission state change
-  std::optional<WaypointRecord> waypoint;     // last waypoint sent
-  TailRecovery journal_tail;                  // a torn last record, discarded
-  std::size_t uncommitted_records = 0;        // records of an unfinished submap group, discarded
-  std::size_t journal_records = 0;            // records kept
+  slam::PipelineState pipeline;             // committed submaps, closures, current estimates
+  std::optional<MissionStateRecord> state;  // last mission state change
+  std::optional<WaypointRecord> waypoint;   // last waypoint sent
+  TailRecovery journal_tail;                // a torn last record, discarded
+  std::size_t uncommitted_records = 0;      // records of an unfinished submap group, discarded
+  std::size_t journal_records = 0;          // records kept
 };
 
 class MissionStore {
@@ -71,17 +71,18 @@ class MissionStore {
   std::int64_t nextSubmapIndex() const;
 
  private:
-  MissionStore(std::filesystem::path dir, SubmapStore submaps, std::unique_ptr<Journal> journal, std::int64_t next_index)
+  MissionStore(std::filesystem::path dir, SubmapStore submaps, std::unique_ptr<Journal> journal,
+               std::int64_t next_index)
       : dir_(std::move(dir)), submaps_(std::move(submaps)), journal_(std::move(journal)), next_index_(next_index) {}
   Status appendLocked(const JournalRecord& record);
 
   const std::filesystem::path dir_;
   const SubmapStore submaps_;
   mutable std::mutex mutex_;
-  std::unique_ptr<Journal> journal_;       // guarded by mutex_
-  std::vector<JournalRecord> staged_;      // the open submap group, guarded by mutex_
-  std::int64_t next_index_ = 0;            // index the next onSubmapClosed must carry, guarded by mutex_
-  std::optional<Error> failed_;            // guarded by mutex_
+  std::unique_ptr<Journal> journal_;   // guarded by mutex_
+  std::vector<JournalRecord> staged_;  // the open submap group, guarded by mutex_
+  std::int64_t next_index_ = 0;        // index the next onSubmapClosed must carry, guarded by mutex_
+  std::optional<Error> failed_;        // guarded by mutex_
 };
 
 }  // namespace vog::mission

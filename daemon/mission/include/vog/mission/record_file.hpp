@@ -37,7 +37,7 @@ struct FramedRecord {
 
 struct TailRecovery {
   bool torn = false;
-  std::uint64_t offset = 0;           // where the discarded tail began
+  std::uint64_t offset = 0;  // where the discarded tail began
   std::uint64_t discarded_bytes = 0;
 };
 

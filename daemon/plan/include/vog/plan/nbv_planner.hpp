@@ -10,8 +10,8 @@
 // with gain the sonar-fan gain swept along the edge (SonarGain) and cost the travel time (translation
 // at v_max and turning at the yaw rate, simultaneously) expressed in metres at v_max: Bircher's cost is
 // the path length, for which lambda = 0.5 per metre is tuned (thesis Table 4.2), and a turn on the spot
-// costs the distance the vehicle could have covered meanwhile. The first edge of the best branch is executed; the rest of that branch seeds the next
-// tree (re-checked against the newer map).
+// costs the distance the vehicle could have covered meanwhile. The first edge of the best branch is executed; the rest
+// of that branch seeds the next tree (re-checked against the newer map).
 //
 // Global search (PlannerConfig::global_search): when no node's value exceeds gain_threshold (after
 // growing to n_tol nodes or spending max_samples), the nearest reachable candidate view whose fan sees
@@ -53,11 +53,11 @@ const char* toString(PlanStatus status);
 
 struct TreeNode {
   Waypoint w;
-  int parent = -1;        // index in the tree; -1 for the root
-  double cost_m = 0.0;    // travel time from the root, in metres at v_max
-  double gain = 0.0;      // gain of the edge parent -> this node
-  double value = 0.0;     // Bircher 2016 Eq. 1 (see above)
-  bool seeded = false;    // re-inserted from the previous best branch
+  int parent = -1;      // index in the tree; -1 for the root
+  double cost_m = 0.0;  // travel time from the root, in metres at v_max
+  double gain = 0.0;    // gain of the edge parent -> this node
+  double value = 0.0;   // Bircher 2016 Eq. 1 (see above)
+  bool seeded = false;  // re-inserted from the previous best branch
 };
 
 struct PlanResult {
@@ -67,13 +67,13 @@ struct PlanResult {
   std::vector<Waypoint> waypoints;
   std::vector<Waypoint> best_branch;  // kExplore: root .. best node
   double best_value = 0.0;
-  double best_gain = 0.0;             // gain of the best node's own edge
-  int tree_size = 0;                  // nodes including the root
-  int samples = 0;                    // sampling attempts
+  double best_gain = 0.0;  // gain of the best node's own edge
+  int tree_size = 0;       // nodes including the root
+  int samples = 0;         // sampling attempts
   std::uint64_t map_version = 0;
-  std::string reason;                 // why kComplete / kNoPath, or "global goal ..." for a global search
-  bool global_goal = false;           // kExplore toward a goal of the global search
-  int global_candidates = 0;          // gain evaluations of the global search (0: not run)
+  std::string reason;         // why kComplete / kNoPath, or "global goal ..." for a global search
+  bool global_goal = false;   // kExplore toward a goal of the global search
+  int global_candidates = 0;  // gain evaluations of the global search (0: not run)
 };
 
 // The vehicle turns while it moves, so its collision box may face any heading: collisions are checked
@@ -161,8 +161,8 @@ class NbvPlanner {
   std::optional<TraversabilityGrid> grid_;
   std::optional<SonarGain> gain_;
   double resolution_m_ = 0.0;
-  std::vector<Waypoint> seed_branch_;  // best branch of the last call after its first edge
-  std::vector<Eigen::Vector3d> global_goals_;  // goals chosen by the global search so far
+  std::vector<Waypoint> seed_branch_;               // best branch of the last call after its first edge
+  std::vector<Eigen::Vector3d> global_goals_;       // goals chosen by the global search so far
   std::optional<Eigen::Vector3d> pending_retreat_;  // where the next plan() backs off to
   std::vector<Waypoint> revisit_views_;             // requestRevisit() for the next plan()
   std::vector<Eigen::Vector3d> contacts_;           // reportObstruction(), oldest first

@@ -32,18 +32,18 @@ struct PlannerConfig {
   // revisits and contacts: no refused step in 20 runs; two voxels: 4 refused steps in 3 runs, the
   // estimate 0.46-0.48 m off the truth where the map still showed 0.84-1.2 m of room).
   double clearance_m = 0.3;
-  double planner_range_m = 5.0;           // d_max^planner (Table 4.2)
-  double lambda = 0.5;                    // gain discount per metre of path cost (Table 4.2)
-  double max_edge_m = 2.0;                // RRT max edge length (Table 4.2)
-  int n_max = 15;                         // tree size (Table 4.2, N_max)
+  double planner_range_m = 5.0;  // d_max^planner (Table 4.2)
+  double lambda = 0.5;           // gain discount per metre of path cost (Table 4.2)
+  double max_edge_m = 2.0;       // RRT max edge length (Table 4.2)
+  int n_max = 15;                // tree size (Table 4.2, N_max)
   // Bircher 2016's N_TOL: while no node has gain above the threshold the tree keeps growing up to
   // this size before exploration is declared complete (our choice).
   int n_tol = 60;
   // Sampling attempts per plan call, so a boxed-in vehicle is reported, never looped on (our choice).
   int max_samples = 600;
   double max_heading_change_rad = std::numbers::pi / 2;  // thesis 4.5.3: 90 deg
-  double v_max_mps = 0.25;                // Table 4.2
-  double yaw_rate_radps = 0.15;           // Table 4.2, psi
+  double v_max_mps = 0.25;                               // Table 4.2
+  double yaw_rate_radps = 0.15;                          // Table 4.2, psi
   // Thesis 4.5.3 two-step sampling: share of samples drawn in x-y at the current depth; the rest
   // are drawn along z at the current x-y (our choice).
   double xy_sample_share = 0.7;

@@ -64,7 +64,8 @@ class SonarGain {
     const map::VoxelKey d = key - box_keys_.min;
     return static_cast<std::size_t>(d.x()) +
            static_cast<std::size_t>(box_size_.x()) *
-               (static_cast<std::size_t>(d.y()) + static_cast<std::size_t>(box_size_.y()) * static_cast<std::size_t>(d.z()));
+               (static_cast<std::size_t>(d.y()) +
+                static_cast<std::size_t>(box_size_.y()) * static_cast<std::size_t>(d.z()));
   }
   // First visit of box voxel i in this segment?
   bool firstVisit(std::size_t i) {

@@ -44,9 +44,9 @@ struct AssumedFree {
 };
 
 struct TraversabilityUpdate {
-  bool rebuilt = false;          // the snapshot was not a descendant: rebuilt from scratch
-  int blocks_read = 0;           // changed or removed map blocks that touch the grid
-  int blocks_recomputed = 0;     // 8^3 blocks in the box of recomputed safe flags
+  bool rebuilt = false;       // the snapshot was not a descendant: rebuilt from scratch
+  int blocks_read = 0;        // changed or removed map blocks that touch the grid
+  int blocks_recomputed = 0;  // 8^3 blocks in the box of recomputed safe flags
 };
 
 class TraversabilityGrid {
@@ -89,7 +89,8 @@ class TraversabilityGrid {
   // A shortest 26-connected path of safe voxels from `from` to `to` (A*, Hart 1968), shortened by
   // dropping waypoints while the direct edge stays free. Starts at `from`, ends at `to`; an error when
   // either end is not safe or no path exists.
-  Result<std::vector<Eigen::Vector3d>> findPath(const Eigen::Vector3d& from_world, const Eigen::Vector3d& to_world) const;
+  Result<std::vector<Eigen::Vector3d>> findPath(const Eigen::Vector3d& from_world,
+                                                const Eigen::Vector3d& to_world) const;
 
   // The safe voxels inside the exploration box reachable from `from_world` through safe face
   // neighbours (the steps findPath takes), in breadth-first order, so by non-decreasing number of
@@ -120,8 +121,9 @@ class TraversabilityGrid {
   std::size_t indexOf(const map::VoxelKey& k) const {
     const map::VoxelKey d = k - grid_.min;
     return static_cast<std::size_t>(d.x()) +
-           static_cast<std::size_t>(size_.x()) * (static_cast<std::size_t>(d.y()) +
-                                                   static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(d.z()));
+           static_cast<std::size_t>(size_.x()) *
+               (static_cast<std::size_t>(d.y()) +
+                static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(d.z()));
   }
   // Copies the status of one map block (nullptr: entirely unknown) into status_.
   void readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
@@ -133,12 +135,12 @@ class TraversabilityGrid {
   double inv_resolution_ = 0.0;
   map::LogOddsBounds bounds_;
   Eigen::AlignedBox3d box_world_;
-  map::KeyBox grid_;                 // inclusive keys covered by status_ and safe_
+  map::KeyBox grid_;  // inclusive keys covered by status_ and safe_
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
   Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
-  std::vector<std::uint8_t> status_;  // map::Occupancy per voxel
-  std::vector<std::uint8_t> safe_;   // 1 = a box centred in this voxel is in known free space
-  std::vector<map::VoxelKey> contacts_;  // addContact(), inside grid_
+  std::vector<std::uint8_t> status_;             // map::Occupancy per voxel
+  std::vector<std::uint8_t> safe_;               // 1 = a box centred in this voxel is in known free space
+  std::vector<map::VoxelKey> contacts_;          // addContact(), inside grid_
   std::uint64_t map_version_ = 0;
   std::uint64_t map_writer_ = 0;  // MergedMap::writerId() of the snapshots this grid reflects
 };

@@ -48,11 +48,11 @@ struct G2oEdgeSE3 {
 // A parsed graph is either 2D or 3D (mixing is rejected). Vertices are keyed by id.
 struct G2oGraph {
   bool is_3d = false;
-  std::map<std::int64_t, Eigen::Vector3d> vertices_se2;         // (x, y, theta)
-  std::map<std::int64_t, geometry::Pose3> vertices_se3;         // T_world_vertex
+  std::map<std::int64_t, Eigen::Vector3d> vertices_se2;  // (x, y, theta)
+  std::map<std::int64_t, geometry::Pose3> vertices_se3;  // T_world_vertex
   std::vector<G2oEdgeSE2> edges_se2;
   std::vector<G2oEdgeSE3> edges_se3;
-  std::set<std::int64_t> fixed;                                  // from FIX lines
+  std::set<std::int64_t> fixed;  // from FIX lines
   // True when the file had no VERTEX lines: the vertices were created from the edges' ids and
   // initialised by initializeFromSpanningTree().
   bool vertices_from_edges = false;

@@ -129,7 +129,7 @@ struct IcpAcceptanceConfig {
 
 struct IcpAcceptance {
   bool accepted = false;
-  std::string reason;  // why rejected (empty when accepted)
+  std::string reason;                       // why rejected (empty when accepted)
   double translation_disagreement_m = 0.0;  // |(x, y) of ICP - (x, y) of odometry|
   double drift_bound_m = 0.0;
 };

@@ -39,8 +39,8 @@ bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b);
 
 // All candidate pairs (i, j) with i < j as positions in `submaps`. Errors on a bad config, a
 // non-finite pose/box/centroid or a box with min > max (naming the submap index).
-Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(
-    const std::vector<SubmapFootprint>& submaps, const CandidateConfig& config = {});
+Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(const std::vector<SubmapFootprint>& submaps,
+                                                                            const CandidateConfig& config = {});
 
 // Squared Mahalanobis distance of the (x, y, yaw) difference between a registration and the odometry
 // prediction (yaw wrapped) under the relative-pose covariance (3x3, x, y, yaw); errors when the

@@ -91,7 +91,7 @@ struct LoopCloseStats {
   int accepted = 0;
   int rejected = 0;
   std::map<std::string, int> rejected_by_reason;  // cause -> count
-  int skipped_heading = 0;  // candidates skipped by the viewing-direction gate (not tried)
+  int skipped_heading = 0;                        // candidates skipped by the viewing-direction gate (not tried)
   void add(const LoopCloseStats& other);
 };
 

@@ -54,8 +54,8 @@ struct MappingUpdate {
   std::vector<LoopClosure> closures;          // accepted for it
   LoopCloseStats loop_stats;                  // of this call
   bool optimized = false;
-  OptimizeResult optimize;                    // valid when optimized
-  std::vector<map::SubmapId> moved;           // submaps whose base pose changed in the VogMap
+  OptimizeResult optimize;           // valid when optimized
+  std::vector<map::SubmapId> moved;  // submaps whose base pose changed in the VogMap
   // The new submap as the builder closed it (grid, odometry factor, absolute measurement): what a
   // mission store persists so that restore() can rebuild the graph. Set iff closed_submap is.
   std::optional<ClosedSubmap> closed;
@@ -111,7 +111,10 @@ class MappingPipeline {
  private:
   MappingPipeline(const MappingPipelineConfig& config, SubmapBuilder builder, LoopCloser closer, PoseGraph graph,
                   std::unique_ptr<map::VogMap> map)
-      : config_(config), builder_(std::move(builder)), closer_(std::move(closer)), graph_(std::move(graph)),
+      : config_(config),
+        builder_(std::move(builder)),
+        closer_(std::move(closer)),
+        graph_(std::move(graph)),
         map_(std::move(map)) {}
   Result<MappingUpdate> process(ClosedSubmap closed);
 

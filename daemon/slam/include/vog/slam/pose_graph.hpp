@@ -92,8 +92,7 @@ class PoseGraph {
 
   Status addNode(NodeId id, const geometry::Pose3& T_world_node);
   // (dx, dy, dyaw) as planarOdometry() computes it; information 3x3 in that order.
-  Status addOdometryFactor(NodeId from, NodeId to, const Eigen::Vector3d& dxy_dyaw,
-                           const Eigen::Matrix3d& information);
+  Status addOdometryFactor(NodeId from, NodeId to, const Eigen::Vector3d& dxy_dyaw, const Eigen::Matrix3d& information);
   // Absolute (z, roll, pitch); information 3x3 in that order.
   Status addAbsoluteFactor(NodeId id, const Eigen::Vector3d& z_roll_pitch, const Eigen::Matrix3d& information);
   // Full 6-DOF closure: T_from_to measured; information 6x6 over (x, y, z, roll, pitch, yaw).
@@ -155,7 +154,7 @@ class PoseGraph {
     RelativeKind kind;
     NodeId from;
     NodeId to;
-    Vector6d measurement;  // odometry and SE2: (dx, dy, 0, 0, 0, dyaw); closures: x_icp; SE3: unused
+    Vector6d measurement;              // odometry and SE2: (dx, dy, 0, 0, 0, dyaw); closures: x_icp; SE3: unused
     Eigen::MatrixXd projection;        // k x 6
     Eigen::MatrixXd sqrt_information;  // k x k, upper triangular
     geometry::Pose3 T_from_to = geometry::Pose3::Identity();  // SE3 only

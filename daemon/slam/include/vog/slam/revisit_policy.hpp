@@ -56,7 +56,8 @@ class RevisitPolicy {
   int revisits() const { return revisits_; }
 
  private:
-  RevisitPolicy(const RevisitConfig& config, std::int64_t start_stamp_ns) : config_(config), start_ns_(start_stamp_ns) {}
+  RevisitPolicy(const RevisitConfig& config, std::int64_t start_stamp_ns)
+      : config_(config), start_ns_(start_stamp_ns) {}
   // Seconds since the start stamp.
   double secondsOf(std::int64_t stamp_ns) const { return 1e-9 * static_cast<double>(stamp_ns - start_ns_); }
 

@@ -40,7 +40,7 @@ struct SubmapBuilderConfig {
   // so it only acts when scans are sparse or the odometry is noisier.
   double max_position_stddev_m = 0.3;
   double max_yaw_stddev_rad = 0.01;
-  int max_scans = 100;                                       // thesis Table 4.2
+  int max_scans = 100;                                      // thesis Table 4.2
   double max_heading_change_rad = geometry::deg2rad(90.0);  // thesis 4.5.3, Fig. 4.14
   // Names the first bad key and value, or is ok.
   Status validate() const;
@@ -58,7 +58,7 @@ enum class CloseReason { kUncertainty, kScanCount, kHeadingChange, kFlush };
 const char* toString(CloseReason reason);
 
 struct ClosedSubmap {
-  std::int64_t index = 0;  // 0, 1, 2, ... in closing order
+  std::int64_t index = 0;                      // 0, 1, 2, ... in closing order
   std::shared_ptr<const map::LocalGrid> grid;  // finalized, in the base frame
   geometry::Pose3 T_world_base_odom = geometry::Pose3::Identity();
   Eigen::Vector3d base_z_roll_pitch = Eigen::Vector3d::Zero();  // absolute measurement at the base scan

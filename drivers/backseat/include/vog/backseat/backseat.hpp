@@ -34,7 +34,7 @@ struct TimeOfDay {
   double seconds_since_midnight = 0.0;
 };
 
-struct NavSentence {  // $BFNVG
+struct NavSentence {          // $BFNVG
   std::int64_t stamp_ns = 0;  // host receive time (set by the driver)
   TimeOfDay time;
   double latitude_deg = 0.0;   // north positive

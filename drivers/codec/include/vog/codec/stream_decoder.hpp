@@ -17,12 +17,12 @@
 namespace vog::codec {
 
 struct StreamStats {
-  std::uint64_t frames = 0;            // frames returned by next()
-  std::uint64_t bad_checksum = 0;      // damaged frames dropped (BadKind::kChecksum)
-  std::uint64_t malformed = 0;         // impossible headers dropped (BadKind::kMalformed)
-  std::uint64_t garbage_bytes = 0;     // bytes dropped while looking for a sync (BadKind::kNoSync)
-  std::uint64_t overflow_bytes = 0;    // bytes dropped because the buffer limit was hit
-  std::string last_error;              // reason of the most recent drop, empty if none
+  std::uint64_t frames = 0;          // frames returned by next()
+  std::uint64_t bad_checksum = 0;    // damaged frames dropped (BadKind::kChecksum)
+  std::uint64_t malformed = 0;       // impossible headers dropped (BadKind::kMalformed)
+  std::uint64_t garbage_bytes = 0;   // bytes dropped while looking for a sync (BadKind::kNoSync)
+  std::uint64_t overflow_bytes = 0;  // bytes dropped because the buffer limit was hit
+  std::string last_error;            // reason of the most recent drop, empty if none
 
   std::uint64_t badFrames() const { return bad_checksum + malformed; }
 };
@@ -61,8 +61,7 @@ class StreamDecoder {
           read_pos_ += std::min(result.consumed(), view.size());
           ++stats_.frames;
           return std::move(result).frame();
-        case DecodeStatus::kNeedMore:
-          return std::nullopt;
+        case DecodeStatus::kNeedMore: return std::nullopt;
         case DecodeStatus::kBad: {
           const std::size_t skip = std::min(result.consumed(), view.size());
           read_pos_ += skip;

@@ -40,9 +40,9 @@ struct DigiquartzMessage {
   Kind kind = Kind::kPressure;
   int destination = 0;
   int source = 1;
-  std::string body;     // text after the address, without CR LF
+  std::string body;            // text after the address, without CR LF
   bool write_enabled = false;  // the command was prefixed by "*ddssEW" (required for settings)
-  double value = 0.0;   // the number for kPressure, the value after '=' when numeric otherwise
+  double value = 0.0;          // the number for kPressure, the value after '=' when numeric otherwise
 };
 
 struct DigiquartzDecoderConfig {

@@ -41,9 +41,9 @@ struct DvlFixedLeader {
   double blank_m = 0.0;
   std::uint8_t coordinate_transform = 0;  // raw EX byte
   CoordinateFrame coordinate_frame = CoordinateFrame::kBeam;
-  bool tilts_used = false;        // EX bit 2
+  bool tilts_used = false;          // EX bit 2
   bool three_beam_allowed = false;  // EX bit 1
-  bool bin_mapping = false;       // EX bit 0
+  bool bin_mapping = false;         // EX bit 0
   double heading_alignment_deg = 0.0;
   double heading_bias_deg = 0.0;
   double bin1_distance_m = 0.0;
@@ -71,9 +71,9 @@ struct DvlVariableLeader {
 // the bottom relative to the instrument (opposite sign to the vehicle velocity).
 struct DvlBottomTrack {
   int pings_per_ensemble = 0;
-  std::array<double, 4> range_m{};         // vertical range to the bottom per beam, 0 = none
-  std::array<double, 4> velocity_mps{};    // NaN-free: invalid entries are 0 and flagged below
-  std::array<bool, 4> velocity_valid{};    // false when the wire value was -32768
+  std::array<double, 4> range_m{};       // vertical range to the bottom per beam, 0 = none
+  std::array<double, 4> velocity_mps{};  // NaN-free: invalid entries are 0 and flagged below
+  std::array<bool, 4> velocity_valid{};  // false when the wire value was -32768
   std::array<std::uint8_t, 4> correlation{};
   std::array<std::uint8_t, 4> amplitude{};
   std::array<std::uint8_t, 4> percent_good{};
@@ -98,7 +98,7 @@ struct BottomVelocity {
   CoordinateFrame frame = CoordinateFrame::kInstrument;
   std::array<double, 3> velocity_mps{};  // x, y, z axes of `frame` (RDI conventions per frame)
   double error_velocity_mps = 0.0;
-  bool valid = false;                    // true when returned by bottomVelocity(); false = default
+  bool valid = false;  // true when returned by bottomVelocity(); false = default
   std::array<bool, 4> beam_valid{};
 };
 

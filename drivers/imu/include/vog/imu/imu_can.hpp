@@ -19,10 +19,10 @@ namespace vog::imu {
 namespace can_layout {
 constexpr canid_t kDefaultBaseId = 0x180;  // frames use base_id + 0..3 (11-bit standard IDs)
 constexpr int kFramesPerSample = 4;
-constexpr double kAttitudeScale_rad = 1e-4;     // i16 count
-constexpr double kRateScale_radps = 1e-4;       // i16 count, +-3.27 rad/s
+constexpr double kAttitudeScale_rad = 1e-4;       // i16 count
+constexpr double kRateScale_radps = 1e-4;         // i16 count, +-3.27 rad/s
 constexpr double kDeltaVelocityScale_mps = 1e-5;  // i16 count, +-0.327 m/s per interval
-constexpr double kDtScale_s = 1e-6;             // u16 microseconds
+constexpr double kDtScale_s = 1e-6;               // u16 microseconds
 }  // namespace can_layout
 
 struct ImuCanConfig {

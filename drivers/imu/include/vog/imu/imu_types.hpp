@@ -17,14 +17,14 @@ struct ImuAttitude {
 };
 
 struct ImuSample {
-  std::int64_t stamp_ns = 0;     // host receive time for CAN, GPS-derived time for RAWIMUS
-  std::uint32_t sequence = 0;    // wire sequence counter (CAN: 8 bits, wraps at 256)
-  std::uint32_t status = 0;      // device status word; 0 = healthy
-  std::optional<ImuAttitude> attitude;             // CAN only (an AHRS solution)
+  std::int64_t stamp_ns = 0;                          // host receive time for CAN, GPS-derived time for RAWIMUS
+  std::uint32_t sequence = 0;                         // wire sequence counter (CAN: 8 bits, wraps at 256)
+  std::uint32_t status = 0;                           // device status word; 0 = healthy
+  std::optional<ImuAttitude> attitude;                // CAN only (an AHRS solution)
   std::optional<Eigen::Vector3d> angular_rate_radps;  // CAN only
   Eigen::Vector3d delta_velocity_mps = Eigen::Vector3d::Zero();  // integrated over dt_s
-  std::optional<Eigen::Vector3d> delta_angle_rad;  // RAWIMUS only
-  double dt_s = 0.01;                              // integration interval (100 Hz default)
+  std::optional<Eigen::Vector3d> delta_angle_rad;                // RAWIMUS only
+  double dt_s = 0.01;                                            // integration interval (100 Hz default)
 };
 
 }  // namespace vog::imu

@@ -22,9 +22,9 @@ constexpr std::size_t kRecordBytes = kHeaderBytes + kBodyBytes + 4;
 }  // namespace rawimus
 
 struct RawImusConfig {
-  double gyro_scale_rad_per_count = 1.0 / 8589934592.0;               // 2^-33
-  double accel_scale_mps_per_count = 0.3048 / 134217728.0;            // 2^-27 ft/s
-  double rate_hz = 100.0;                                              // HG1700 data rate
+  double gyro_scale_rad_per_count = 1.0 / 8589934592.0;     // 2^-33
+  double accel_scale_mps_per_count = 0.3048 / 134217728.0;  // 2^-27 ft/s
+  double rate_hz = 100.0;                                   // HG1700 data rate
 };
 
 class RawImusCodec {

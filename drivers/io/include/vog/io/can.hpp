@@ -30,8 +30,8 @@ struct CanFilter {
 
 // Config `can: {interface: can0}` or `can: {unix_seqpacket: /run/vog/imu.sock}`; exactly one is set.
 struct CanConfig {
-  std::string interface;       // PF_CAN raw socket bound to this interface (kernel filters + ours)
-  std::string unix_seqpacket;  // path of a SOCK_SEQPACKET server socket carrying can_frame records
+  std::string interface;           // PF_CAN raw socket bound to this interface (kernel filters + ours)
+  std::string unix_seqpacket;      // path of a SOCK_SEQPACKET server socket carrying can_frame records
   std::vector<CanFilter> filters;  // empty = accept every data frame
   ReconnectConfig reconnect;
 

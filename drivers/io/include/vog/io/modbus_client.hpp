@@ -15,14 +15,14 @@ namespace vog::io {
 
 // Exactly one of `tcp_address` and `rtu_device` is set.
 struct ModbusConfig {
-  std::string tcp_address;           // numeric address of a Modbus TCP server
-  std::uint16_t tcp_port = 502;      // Modbus TCP standard port
-  std::string rtu_device;            // serial device of a Modbus RTU bus
-  unsigned rtu_baud = 19200;         // Modbus over serial line spec default: 19200, even parity
+  std::string tcp_address;       // numeric address of a Modbus TCP server
+  std::uint16_t tcp_port = 502;  // Modbus TCP standard port
+  std::string rtu_device;        // serial device of a Modbus RTU bus
+  unsigned rtu_baud = 19200;     // Modbus over serial line spec default: 19200, even parity
   Parity rtu_parity = Parity::kEven;
   int rtu_data_bits = 8;
   int rtu_stop_bits = 1;
-  int slave_id = 1;                  // unit identifier, 1..247
+  int slave_id = 1;  // unit identifier, 1..247
   int response_timeout_ms = 500;
 
   Status validate(const std::string& prefix = "modbus") const;

@@ -17,12 +17,12 @@ namespace vog::io {
 enum class Parity { kNone, kOdd, kEven };
 
 struct SerialConfig {
-  std::string device_path;        // e.g. /dev/ttyUSB0 or a symlink such as /dev/serial/by-id/...
-  unsigned baud = 115200;         // PD0 Workhorse default 115200 8N1; Digiquartz commonly 9600 8N1
+  std::string device_path;  // e.g. /dev/ttyUSB0 or a symlink such as /dev/serial/by-id/...
+  unsigned baud = 115200;   // PD0 Workhorse default 115200 8N1; Digiquartz commonly 9600 8N1
   Parity parity = Parity::kNone;
-  int data_bits = 8;              // 5..8
-  int stop_bits = 1;              // 1 or 2
-  bool exclusive = true;          // TIOCEXCL: a second open by another process fails with EBUSY
+  int data_bits = 8;      // 5..8
+  int stop_bits = 1;      // 1 or 2
+  bool exclusive = true;  // TIOCEXCL: a second open by another process fails with EBUSY
   std::size_t read_chunk_bytes = 4096;
   ReconnectConfig reconnect;
 

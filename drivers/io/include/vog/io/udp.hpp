@@ -20,12 +20,12 @@ using DatagramHandler = std::function<void(std::span<const std::uint8_t> datagra
 
 struct UdpReceiverConfig {
   std::string bind_address = "127.0.0.1";  // numeric IPv4/IPv6 address
-  std::uint16_t port = 0;                   // 0 = any free port (see UdpReceiver::localPort)
+  std::uint16_t port = 0;                  // 0 = any free port (see UdpReceiver::localPort)
   // Largest datagram accepted; a larger one is counted as an error and dropped, never delivered
   // truncated. 65507 = largest UDP payload over IPv4; a 96 x 512 DIDSON frame is 49152 bytes.
   std::size_t max_datagram_bytes = 65507;
-  int receive_buffer_bytes = 4 << 20;      // SO_RCVBUF: several frames of burst at 10 frames/s
-  ReconnectConfig reconnect;                // rebinding when the bind fails (address not yet up)
+  int receive_buffer_bytes = 4 << 20;  // SO_RCVBUF: several frames of burst at 10 frames/s
+  ReconnectConfig reconnect;           // rebinding when the bind fails (address not yet up)
 
   Status validate(const std::string& prefix = "udp") const;
 };

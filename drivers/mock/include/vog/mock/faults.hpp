@@ -46,9 +46,9 @@ class FaultInjector {
 
  private:
   mutable std::mutex mutex_;
-  std::vector<Fault> armed_;  // guarded by mutex_, front = next
+  std::vector<Fault> armed_;                          // guarded by mutex_, front = next
   std::array<std::uint64_t, kFaultKinds> applied_{};  // guarded by mutex_
-  std::mt19937_64 rng_;  // guarded by mutex_
+  std::mt19937_64 rng_;                               // guarded by mutex_
 };
 
 }  // namespace vog::mock

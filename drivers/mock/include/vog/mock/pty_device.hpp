@@ -54,8 +54,8 @@ class PtyDevice {
 
  private:
   PtyDevice(std::filesystem::path link_path, HostBytesHandler on_host);
-  Status openPty();   // device thread (or before it starts)
-  void closePty();    // device thread
+  Status openPty();  // device thread (or before it starts)
+  void closePty();   // device thread
   void onReady(const std::vector<pollfd>& fds);
   void flush();
 

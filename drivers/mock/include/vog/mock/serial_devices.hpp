@@ -61,10 +61,10 @@ class DepthMock {
   FaultInjector faults_;
   std::unique_ptr<PtyDevice> pty_;
   mutable std::mutex mutex_;
-  double pressure_ = 0.0;             // guarded by mutex_
-  bool continuous_ = false;           // guarded by mutex_
-  std::uint64_t commands_ = 0;        // guarded by mutex_
-  std::vector<std::uint8_t> line_;    // device thread: partial command line
+  double pressure_ = 0.0;           // guarded by mutex_
+  bool continuous_ = false;         // guarded by mutex_
+  std::uint64_t commands_ = 0;      // guarded by mutex_
+  std::vector<std::uint8_t> line_;  // device thread: partial command line
 };
 
 }  // namespace vog::mock

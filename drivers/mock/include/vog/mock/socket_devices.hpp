@@ -85,8 +85,8 @@ class BackseatMock {
   std::unique_ptr<StreamServer> server_;
   mutable std::mutex mutex_;
   std::vector<backseat::BackseatSentence> received_;  // guarded by mutex_
-  bool acknowledge_ = true;                            // guarded by mutex_
-  std::vector<std::uint8_t> pending_;                  // device thread: undecoded bytes
+  bool acknowledge_ = true;                           // guarded by mutex_
+  std::vector<std::uint8_t> pending_;                 // device thread: undecoded bytes
 };
 
 }  // namespace vog::mock

@@ -52,9 +52,9 @@ class StreamServer {
   StreamServerConfig config_;
   ClientHandler on_client_;
   std::uint16_t port_ = 0;
-  int listen_fd_ = -1;        // device thread
-  std::vector<int> clients_;  // device thread
-  std::size_t client_count_ = 0;   // atomic-ish copy, guarded by mutex_
+  int listen_fd_ = -1;              // device thread
+  std::vector<int> clients_;        // device thread
+  std::size_t client_count_ = 0;    // atomic-ish copy, guarded by mutex_
   std::uint64_t records_sent_ = 0;  // guarded by mutex_
   mutable std::mutex mutex_;
   DeviceThread thread_;

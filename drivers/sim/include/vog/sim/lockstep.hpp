@@ -22,12 +22,12 @@ namespace vog::sim {
 
 struct LockstepConfig {
   std::uint64_t seed = 1;
-  double sonar_rate_hz = 5.0;        // thesis Table 4.2, FPS_sensor
-  int frame_every = 1;               // render the intensity frame of every n-th scan; 0 = none
+  double sonar_rate_hz = 5.0;  // thesis Table 4.2, FPS_sensor
+  int frame_every = 1;         // render the intensity frame of every n-th scan; 0 = none
   VehicleConfig vehicle;
   SonarModelConfig sonar;
   NavSensorConfig nav;
-  OdometryNoiseConfig odometry;      // its rate is also the simulation step rate
+  OdometryNoiseConfig odometry;  // its rate is also the simulation step rate
 
   Status validate() const;
 };
@@ -42,8 +42,8 @@ class SimulationSink {
   virtual void dvl(const DvlSample& /*sample*/) {}
   virtual void depth(const DepthSample& /*sample*/) {}
   // A sonar ping taken at the true pose; `frame` of the ping is empty unless it was rendered.
-  virtual void scan(std::uint32_t /*scan_index*/, const SonarPing& /*ping*/, const geometry::Pose3& /*T_world_vehicle_true*/,
-                    const geometry::Pose3& /*T_world_vehicle_odom*/) {}
+  virtual void scan(std::uint32_t /*scan_index*/, const SonarPing& /*ping*/,
+                    const geometry::Pose3& /*T_world_vehicle_true*/, const geometry::Pose3& /*T_world_vehicle_odom*/) {}
 };
 
 class LockstepSimulation {

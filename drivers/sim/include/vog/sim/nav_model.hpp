@@ -40,13 +40,13 @@ Result<OdometryNoiseProfile> parseOdometryNoiseProfile(const std::string& name);
 
 struct OdometryNoiseConfig {
   OdometryNoiseProfile profile = OdometryNoiseProfile::kEq41Literal;
-  double rate_hz = 100.0;                       // default step rate
-  double sigma2_x_m2ps = 0.00138;               // thesis 4.4.1, sigma_x^2
-  double sigma2_y_m2ps = 0.00138;               // thesis 4.4.1, sigma_y^2
-  double sigma2_yaw_rad2ps = 1e-7;              // thesis 4.4.1, sigma_psi^2
-  double z_sigma_m = 0.005;                     // absolute depth noise
+  double rate_hz = 100.0;                                 // default step rate
+  double sigma2_x_m2ps = 0.00138;                         // thesis 4.4.1, sigma_x^2
+  double sigma2_y_m2ps = 0.00138;                         // thesis 4.4.1, sigma_y^2
+  double sigma2_yaw_rad2ps = 1e-7;                        // thesis 4.4.1, sigma_psi^2
+  double z_sigma_m = 0.005;                               // absolute depth noise
   double roll_pitch_sigma_rad = geometry::deg2rad(0.02);  // thesis Table 4.1, IMU roll/pitch
-  bool world_frame_xy_noise = false;            // see above; needs sigma2_x_m2ps == sigma2_y_m2ps
+  bool world_frame_xy_noise = false;                      // see above; needs sigma2_x_m2ps == sigma2_y_m2ps
 
   Status validate() const;
   double dt_s() const { return 1.0 / rate_hz; }
@@ -75,22 +75,22 @@ class OdometryCorruptor {
 
   OdometryNoiseConfig config_;
   std::mt19937_64 rng_;
-  Eigen::Vector3d sigma_step_;        // per-step noise standard deviation of x, y, yaw
-  Eigen::Vector3d previous_true_;     // P_t as (x, y, yaw)
-  Eigen::Vector3d estimate_;          // P^_t as (x, y, yaw)
+  Eigen::Vector3d sigma_step_;     // per-step noise standard deviation of x, y, yaw
+  Eigen::Vector3d previous_true_;  // P_t as (x, y, yaw)
+  Eigen::Vector3d estimate_;       // P^_t as (x, y, yaw)
 };
 
 // ---------------------------------------------------------------------------------------------
 // Navigation sensors.
 struct NavSensorConfig {
   double dvl_rate_hz = 5.0;
-  double dvl_sigma_mps = 0.003;                 // thesis Table 4.1, DVL x, y, z
-  double dvl_max_altitude_m = 30.0;             // bottom lock lost above this
+  double dvl_sigma_mps = 0.003;      // thesis Table 4.1, DVL x, y, z
+  double dvl_max_altitude_m = 30.0;  // bottom lock lost above this
   double imu_rate_hz = 100.0;
   double imu_roll_pitch_sigma_rad = geometry::deg2rad(0.02);  // thesis Table 4.1
   double imu_yaw_sigma_rad = geometry::deg2rad(0.05);         // thesis Table 4.1 (white part)
-  double imu_yaw_drift_rad2ps = 1e-7;           // yaw random-walk variance per second (thesis 4.4.1)
-  double imu_rate_sigma_radps = 1e-4;           // angular-rate white noise
+  double imu_yaw_drift_rad2ps = 1e-7;                         // yaw random-walk variance per second (thesis 4.4.1)
+  double imu_rate_sigma_radps = 1e-4;                         // angular-rate white noise
   double depth_rate_hz = 10.0;
   // Digiquartz accuracy 0.01 % (thesis Table 4.1), taken of full scale as the manufacturer states it.
   double depth_noise_fraction = 1e-4;
@@ -101,20 +101,20 @@ struct NavSensorConfig {
 
 struct DvlSample {
   std::int64_t stamp_ns = 0;
-  bool bottom_lock = false;                     // false: no bottom within range, velocity invalid
+  bool bottom_lock = false;  // false: no bottom within range, velocity invalid
   Eigen::Vector3d velocity_vehicle_mps = Eigen::Vector3d::Zero();
-  double altitude_m = 0.0;                      // range to the bottom straight down (valid with lock)
+  double altitude_m = 0.0;  // range to the bottom straight down (valid with lock)
 };
 
 struct ImuSample {
   std::int64_t stamp_ns = 0;
-  Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();          // yaw drifts
+  Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();  // yaw drifts
   Eigen::Vector3d angular_rate_vehicle_radps = Eigen::Vector3d::Zero();
 };
 
 struct DepthSample {
   std::int64_t stamp_ns = 0;
-  double depth_m = 0.0;                         // positive down (depth = -z_world)
+  double depth_m = 0.0;  // positive down (depth = -z_world)
 };
 
 // Lifecycle: construct, then call the sensors with successive true states (stamps non-decreasing).

@@ -15,9 +15,9 @@ namespace vog::sim {
 struct PathConfig {
   // Distance kept from the exploration box's sides (x, y) so the collision box stays inside it.
   double margin_m = 1.0;
-  double lane_spacing_m = 2.0;   // lawnmower: distance between lanes
-  double orbit_radius_m = 0.0;   // orbit: 0 = largest circle inside the box minus the margin
-  int orbit_points = 36;         // orbit: waypoints per turn
+  double lane_spacing_m = 2.0;  // lawnmower: distance between lanes
+  double orbit_radius_m = 0.0;  // orbit: 0 = largest circle inside the box minus the margin
+  int orbit_points = 36;        // orbit: waypoints per turn
   // z of the path (world frame); NaN = the start depth. Must lie inside the exploration box.
   double z_m = std::numeric_limits<double>::quiet_NaN();
 

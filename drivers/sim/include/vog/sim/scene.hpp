@@ -28,23 +28,23 @@ const char* toString(ObjectType type);
 //             file's folder), scaled by `scale` in the object frame, then posed.
 struct SceneObject {
   ObjectType type = ObjectType::kBox;
-  std::string name;                      // optional label; defaults to "objects[i]"
+  std::string name;  // optional label; defaults to "objects[i]"
   geometry::Pose3 T_world_object = geometry::Pose3::Identity();
-  double radius_m = 0.0;                 // cylinder, tank
-  double length_m = 0.0;                 // cylinder
-  double height_m = 0.0;                 // tank
+  double radius_m = 0.0;                             // cylinder, tank
+  double length_m = 0.0;                             // cylinder
+  double height_m = 0.0;                             // tank
   Eigen::Vector3d size_m = Eigen::Vector3d::Zero();  // box (x, y, z), plane (x, y, unused)
-  std::filesystem::path mesh_file;       // mesh
-  double scale = 1.0;                    // mesh
-  std::string where;                     // "scene.yaml:12" of its entry, for later error messages
+  std::filesystem::path mesh_file;                   // mesh
+  double scale = 1.0;                                // mesh
+  std::string where;                                 // "scene.yaml:12" of its entry, for later error messages
 };
 
 struct Scene {
   std::string name;
-  Eigen::AlignedBox3d bounds_world;      // exploration box, metres, world frame (z up)
+  Eigen::AlignedBox3d bounds_world;                             // exploration box, metres, world frame (z up)
   geometry::Pose3 T_world_start = geometry::Pose3::Identity();  // x, y, z and yaw only
   std::vector<SceneObject> objects;
-  std::filesystem::path source_file;     // empty when parsed from text
+  std::filesystem::path source_file;  // empty when parsed from text
 };
 
 // Reads and validates a scene file. Errors name the file, the line and the key, e.g.

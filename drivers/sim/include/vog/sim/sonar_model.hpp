@@ -36,22 +36,22 @@
 namespace vog::sim {
 
 struct SonarModelConfig {
-  geometry::SonarFan fan;                 // thesis 4.1 / Table 4.2 defaults
+  geometry::SonarFan fan;  // thesis 4.1 / Table 4.2 defaults
   int sub_rays_per_beam = 5;
-  double range_noise_sigma_m = 0.01;      // about half the DIDSON range resolution (thesis 4.1: < 2 cm)
+  double range_noise_sigma_m = 0.01;  // about half the DIDSON range resolution (thesis 4.1: < 2 cm)
   // Intensity frame.
-  int frame_samples = 512;                // 10.5 m window -> 2.05 cm per sample
-  double noise_floor = 12.0;              // mean background level (0-255)
-  double echo_peak = 200.0;               // mean echo amplitude at normal incidence
-  double pulse_length_m = 0.06;           // transmitted pulse length (about 3 samples)
-  double echo_decay_m = 0.05;             // decay length of the echo's tail
+  int frame_samples = 512;       // 10.5 m window -> 2.05 cm per sample
+  double noise_floor = 12.0;     // mean background level (0-255)
+  double echo_peak = 200.0;      // mean echo amplitude at normal incidence
+  double pulse_length_m = 0.06;  // transmitted pulse length (about 3 samples)
+  double echo_decay_m = 0.05;    // decay length of the echo's tail
 
   Status validate() const;
 };
 
 struct SonarPing {
   geometry::RangeScan scan;
-  sonar::SonarFrame frame;    // empty (n_samples == 0) unless requested
+  sonar::SonarFrame frame;  // empty (n_samples == 0) unless requested
 };
 
 class SonarModel {

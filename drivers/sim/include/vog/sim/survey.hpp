@@ -21,7 +21,7 @@ namespace vog::sim {
 
 // The lockstep simulation's settings plus the survey's own limits.
 struct SurveyConfig : LockstepConfig {
-  double max_duration_s = 3600.0;    // simulated time limit
+  double max_duration_s = 3600.0;  // simulated time limit
   // A waypoint not reached within factor * (nominal leg time) + 30 s is skipped and reported.
   double waypoint_timeout_factor = 3.0;
 
@@ -40,9 +40,8 @@ struct SurveySummary {
 
 // Writes meta.yaml, ground_truth.csv, odometry.csv, scans.csv, scan_poses.csv, frames.bin,
 // dvl.csv, imu.csv, depth.csv, events.csv into out_dir (created if missing).
-Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>& waypoints,
-                                const SurveyConfig& config, const std::string& path_label,
-                                const std::filesystem::path& out_dir);
+Result<SurveySummary> runSurvey(const World& world, const std::vector<Waypoint>& waypoints, const SurveyConfig& config,
+                                const std::string& path_label, const std::filesystem::path& out_dir);
 
 // Readers of the recorded sonar streams (for replay and tests).
 struct RecordedScan {

@@ -17,8 +17,8 @@
 namespace vog::sim {
 
 struct VehicleConfig {
-  double max_speed_mps = 0.25;          // thesis Table 4.2, v_max
-  double max_yaw_rate_radps = 0.15;     // thesis Table 4.2, psi
+  double max_speed_mps = 0.25;                     // thesis Table 4.2, v_max
+  double max_yaw_rate_radps = 0.15;                // thesis Table 4.2, psi
   Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};  // thesis Table 4.2 (full extents x, y, z)
   // A waypoint is reached exactly, unless a collision stops the vehicle within this distance and
   // heading error of it: then it counts as reached, not blocked.
@@ -42,7 +42,7 @@ struct VehicleState {
   Eigen::Vector3d xyz_world = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0;
   Eigen::Vector3d velocity_world_mps = Eigen::Vector3d::Zero();  // over the last step
-  double yaw_rate_radps = 0.0;                                    // over the last step
+  double yaw_rate_radps = 0.0;                                   // over the last step
 
   geometry::Pose3 T_world_vehicle() const;
 };

@@ -26,9 +26,9 @@ struct Triangle {
 };
 
 struct RayHit {
-  double range_m = 0.0;               // distance from the origin along the unit direction
-  Eigen::Vector3d normal_world;       // unit geometric normal, facing the ray origin
-  int object_index = -1;              // index into Scene::objects
+  double range_m = 0.0;          // distance from the origin along the unit direction
+  Eigen::Vector3d normal_world;  // unit geometric normal, facing the ray origin
+  int object_index = -1;         // index into Scene::objects
 };
 
 struct WorldConfig {
@@ -90,8 +90,8 @@ class World {
 // unobstructed line of sight no longer than `max_range_m` from at least one collision-free vehicle
 // position inside the box. Candidate positions are a regular grid over the box.
 struct ObservableConfig {
-  double max_range_m = 11.0;                            // thesis Table 4.2, sensor d_max
-  Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};       // thesis Table 4.2
+  double max_range_m = 11.0;                       // thesis Table 4.2, sensor d_max
+  Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};  // thesis Table 4.2
   double viewpoint_spacing_m = 0.5;
 
   Status validate() const;
@@ -99,7 +99,7 @@ struct ObservableConfig {
 
 struct ObservableResult {
   geometry::PointCloud points;
-  std::size_t n_viewpoints = 0;   // collision-free grid positions used
+  std::size_t n_viewpoints = 0;  // collision-free grid positions used
 };
 
 Result<ObservableResult> observablePoints(const World& world, const geometry::PointCloud& surface,

@@ -11,12 +11,12 @@
 namespace vog::sonar {
 
 struct RangeExtractionConfig {
-  bool median_denoise = true;            // 3-sample median along range before thresholding
-  double noise_floor_percentile = 0.5;   // the frame's median intensity estimates the noise floor
-  double threshold_above_noise = 40.0;   // intensity counts (0..255) above the floor
-  int min_run_samples = 3;               // consecutive samples above threshold to count as a return
-  double min_range_m = 0.5;              // returns nearer than this are ignored (ringing, bubbles)
-  double max_range_m = 1e9;              // returns farther than this are ignored
+  bool median_denoise = true;           // 3-sample median along range before thresholding
+  double noise_floor_percentile = 0.5;  // the frame's median intensity estimates the noise floor
+  double threshold_above_noise = 40.0;  // intensity counts (0..255) above the floor
+  int min_run_samples = 3;              // consecutive samples above threshold to count as a return
+  double min_range_m = 0.5;             // returns nearer than this are ignored (ringing, bubbles)
+  double max_range_m = 1e9;             // returns farther than this are ignored
 
   // Names the first bad key and value, or is ok.
   Status validate() const;

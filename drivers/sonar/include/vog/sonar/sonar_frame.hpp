@@ -24,7 +24,8 @@ struct SonarFrame {
   // Range of the centre of sample s.
   double rangeOfSample_m(int s) const { return window_start_m + (s + 0.5) * sampleLength_m(); }
   std::uint8_t at(int beam, int sample) const {
-    return samples[static_cast<std::size_t>(sample) * static_cast<std::size_t>(n_beams) + static_cast<std::size_t>(beam)];
+    return samples[static_cast<std::size_t>(sample) * static_cast<std::size_t>(n_beams) +
+                   static_cast<std::size_t>(beam)];
   }
 };
 

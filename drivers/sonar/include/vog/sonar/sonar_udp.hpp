@@ -77,8 +77,8 @@ Result<std::vector<std::vector<std::uint8_t>>> encodeSonarDatagrams(
 
 struct ReassemblerStats {
   std::uint64_t frames_completed = 0;
-  std::uint64_t frames_dropped = 0;        // evicted incomplete (a fragment was lost)
-  std::uint64_t fragments_rejected = 0;    // inconsistent with the frame's other fragments
+  std::uint64_t frames_dropped = 0;      // evicted incomplete (a fragment was lost)
+  std::uint64_t fragments_rejected = 0;  // inconsistent with the frame's other fragments
   std::uint64_t fragments_duplicate = 0;
 };
 

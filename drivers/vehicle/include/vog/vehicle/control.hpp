@@ -63,8 +63,8 @@ class ControlServer {
 
   std::filesystem::path path_;
   Handler handler_;
-  int listen_fd_ = -1;            // server thread (after start)
-  std::vector<Client> clients_;   // server thread
+  int listen_fd_ = -1;           // server thread (after start)
+  std::vector<Client> clients_;  // server thread
   mock::DeviceThread thread_;
 };
 

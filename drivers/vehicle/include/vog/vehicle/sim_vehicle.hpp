@@ -65,10 +65,10 @@ struct SimVehicleConfig {
   double nav_sentence_rate_hz = 5.0;    // $BFNVG + $BFNVR
   double origin_latitude_deg = 42.0;    // world (0, 0) for the backseat's positions
   double origin_longitude_deg = -71.0;
-  double operating_margin_m = 5.0;      // accepted targets: the scene box grown by this
+  double operating_margin_m = 5.0;  // accepted targets: the scene box grown by this
   double face_target_min_distance_m = 1.0;
-  std::size_t history_steps = 3000;     // truth / scan / depth history kept for truthAt() etc.
-  sim::LockstepConfig lockstep;         // its seed is replaced by `seed`; frame_every by the sonar
+  std::size_t history_steps = 3000;  // truth / scan / depth history kept for truthAt() etc.
+  sim::LockstepConfig lockstep;      // its seed is replaced by `seed`; frame_every by the sonar
   mock::SimWireConfig wire;
 
   // Names the first bad key and value, or is ok.
@@ -76,20 +76,20 @@ struct SimVehicleConfig {
 };
 
 struct VehicleSnapshot {
-  std::int64_t stamp_ns = 0;            // simulated time of the newest step
+  std::int64_t stamp_ns = 0;  // simulated time of the newest step
   sim::VehicleState truth;
   geometry::Pose3 T_world_vehicle_nav = geometry::Pose3::Identity();  // what $BFNVG reports
-  std::optional<Eigen::Vector3d> target_xyz_world;  // true-world target of the current command
+  std::optional<Eigen::Vector3d> target_xyz_world;                    // true-world target of the current command
   std::uint32_t last_command_id = 0;
   std::uint64_t commands_accepted = 0;
   std::uint64_t commands_rejected = 0;
   std::uint64_t heartbeats = 0;
   std::uint64_t blocked_moves = 0;
-  std::uint64_t scans = 0;              // sonar pings (each rendered and sent when the sonar is on)
+  std::uint64_t scans = 0;  // sonar pings (each rendered and sent when the sonar is on)
   std::uint64_t dvl_sent = 0, imu_sent = 0, depth_sent = 0, nav_sentences_sent = 0;
-  double max_lag_ms = 0.0;              // worst wall-clock lateness of a step
-  double ping_step_ms_mean = 0.0;       // mean wall time of a step with a sonar ping (render + send)
-  bool finished = false;                // duration reached or stopped
+  double max_lag_ms = 0.0;         // worst wall-clock lateness of a step
+  double ping_step_ms_mean = 0.0;  // mean wall time of a step with a sonar ping (render + send)
+  bool finished = false;           // duration reached or stopped
 };
 
 // One simulated sample kept for comparison with what a receiver decoded.
