@@ -1,6 +1,8 @@
 #include "test_support.hpp"
 
 #include <atomic>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <stdexcept>
 #include <unistd.h>
@@ -9,6 +11,11 @@ namespace vog::test {
 
 std::filesystem::path sharedDataDir() { return VOG_SHARED_DATA_DIR; }
 std::filesystem::path sourceDir() { return VOG_SOURCE_DIR; }
+
+std::string readFile(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
 
 TempDir::TempDir(const std::string& prefix) {
   static std::atomic<int> counter{0};

@@ -1,5 +1,5 @@
 #pragma once
-// Shared helpers for the unit tests: data paths and temporary directories.
+// Shared helpers for the unit tests: data paths, temporary directories, file contents.
 
 #include <filesystem>
 #include <string>
@@ -10,6 +10,9 @@ namespace vog::test {
 std::filesystem::path sharedDataDir();
 // The project source tree.
 std::filesystem::path sourceDir();
+
+// Every byte of a file (empty when it cannot be read).
+std::string readFile(const std::filesystem::path& file);
 
 // A fresh directory under the system temp dir, removed with its content on destruction.
 class TempDir {

@@ -83,11 +83,6 @@ std::size_t countFiles(const std::filesystem::path& dir) {
   return n;
 }
 
-std::string fileBytes(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
   test::TempDir dir("vogd-test");
   const VogdConfig config = simConfig(dir, 4);
@@ -167,7 +162,7 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
   EXPECT_EQ(stats->submaps, stored);
   EXPECT_EQ(stats->rejected_scans, 0u);
   for (const auto& e : std::filesystem::directory_iterator(*options.mission_dir / "submaps"))
-    EXPECT_EQ(fileBytes(e.path()), fileBytes(out / "submaps" / e.path().filename())) << e.path().filename();
+    EXPECT_EQ(test::readFile(e.path()), test::readFile(out / "submaps" / e.path().filename())) << e.path().filename();
   EXPECT_TRUE(std::filesystem::exists(out / "map.bt"));
   // A second replay into the same folder is refused, not mixed in.
   EXPECT_FALSE(replayMission(config, *options.mission_dir, out).ok());

@@ -6,17 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <sstream>
 
 namespace vog {
 namespace {
-
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 int entries(const std::filesystem::path& dir) {
   int n = 0;
@@ -28,9 +20,9 @@ TEST(AtomicFile, WritesAndReplacesLeavingNoTemporaryFile) {
   test::TempDir dir;
   const auto file = dir.path() / "a.txt";
   ASSERT_TRUE(writeFileAtomically(file, "first").ok());
-  EXPECT_EQ(slurp(file), "first");
+  EXPECT_EQ(test::readFile(file), "first");
   ASSERT_TRUE(writeFileAtomically(file, "second").ok());
-  EXPECT_EQ(slurp(file), "second");
+  EXPECT_EQ(test::readFile(file), "second");
   EXPECT_EQ(entries(dir.path()), 1);
 }
 
@@ -46,7 +38,7 @@ TEST(AtomicFile, ContentWrittenByNameIsCommittedTheSameWay) {
   ASSERT_TRUE(st.ok()) << st.error().message;
   EXPECT_EQ(seen.parent_path(), dir.path());
   EXPECT_NE(seen, file);
-  EXPECT_EQ(slurp(file), "by name");
+  EXPECT_EQ(test::readFile(file), "by name");
   EXPECT_EQ(entries(dir.path()), 1);
 }
 
@@ -60,7 +52,7 @@ TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndRemovesTheTemporaryOne) {
   });
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.error().message, "writer failed");
-  EXPECT_EQ(slurp(file), "old");
+  EXPECT_EQ(test::readFile(file), "old");
   EXPECT_EQ(entries(dir.path()), 1);
   Status missing = writeFileAtomically(dir.path() / "no" / "such" / "dir.txt", "x");
   ASSERT_FALSE(missing.ok());

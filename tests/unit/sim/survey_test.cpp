@@ -13,15 +13,8 @@
 namespace vog::sim {
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::size_t lineCount(const std::filesystem::path& p) {
-  const std::string s = slurp(p);
+  const std::string s = test::readFile(p);
   return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
 }
 
@@ -107,7 +100,7 @@ TEST(Survey, RecordsEveryStreamConsistentlyAndReadsBack) {
   }
   EXPECT_GT(hits, 1000);  // the pilings are in view
 
-  const std::string meta = slurp(dir.path() / "meta.yaml");
+  const std::string meta = test::readFile(dir.path() / "meta.yaml");
   EXPECT_NE(meta.find("profile: eq41, rate_hz: 100"), std::string::npos) << meta;
   EXPECT_NE(meta.find("seed: 4"), std::string::npos);
   EXPECT_NE(meta.find("scene: {name: \"pilings\""), std::string::npos);
@@ -126,12 +119,12 @@ TEST(Survey, SameSeedSameFilesOtherSeedOtherNoise) {
   ASSERT_TRUE(runSurvey(*w, path, cfg, "p", c.path()).ok());
   for (const char* f :
        {"ground_truth.csv", "odometry.csv", "scans.csv", "frames.bin", "dvl.csv", "imu.csv", "depth.csv"}) {
-    EXPECT_EQ(slurp(a.path() / f), slurp(b.path() / f)) << f;
+    EXPECT_EQ(test::readFile(a.path() / f), test::readFile(b.path() / f)) << f;
   }
-  EXPECT_EQ(slurp(a.path() / "ground_truth.csv"),
-            slurp(c.path() / "ground_truth.csv"));  // truth does not depend on the seed
+  EXPECT_EQ(test::readFile(a.path() / "ground_truth.csv"),
+            test::readFile(c.path() / "ground_truth.csv"));  // truth does not depend on the seed
   for (const char* f : {"odometry.csv", "scans.csv", "frames.bin", "imu.csv"})
-    EXPECT_NE(slurp(a.path() / f), slurp(c.path() / f)) << f;
+    EXPECT_NE(test::readFile(a.path() / f), test::readFile(c.path() / f)) << f;
 }
 
 TEST(Survey, BlockedWaypointsAreSkippedAndTheVehicleNeverCollides) {
@@ -146,7 +139,7 @@ TEST(Survey, BlockedWaypointsAreSkippedAndTheVehicleNeverCollides) {
   EXPECT_EQ(sum->waypoints_skipped, 1);
   EXPECT_EQ(sum->waypoints_reached, 1);
   EXPECT_EQ(sum->n_frames, 0u);
-  EXPECT_NE(slurp(dir.path() / "events.csv").find(",blocked,0,"), std::string::npos);
+  EXPECT_NE(test::readFile(dir.path() / "events.csv").find(",blocked,0,"), std::string::npos);
   // Every recorded true pose is collision-free.
   std::ifstream gt(dir.path() / "ground_truth.csv");
   std::string line;
