@@ -434,7 +434,14 @@ void Daemon::planningLoop() {
                    in.obstruction->p_world.x(), in.obstruction->p_world.y(), in.obstruction->p_world.z());
     }
     in.vehicle_idle = source_->idle();
-    in.map = [this]() -> Result<std::shared_ptr<const map::MergedMap>> { return planningSnapshot(); };
+    // The wait for the map (as fast as possible: until mapping has caught up) is not the plan's time.
+    Clock::duration map_wait{};
+    in.map = [&]() -> Result<std::shared_ptr<const map::MergedMap>> {
+      const Clock::time_point t = Clock::now();
+      auto snapshot = planningSnapshot();
+      map_wait += Clock::now() - t;
+      return snapshot;
+    };
     in.submaps = records.get();
     in.closures = closures.get();
     if (in.vehicle_idle || in.obstruction) {
@@ -443,7 +450,7 @@ void Daemon::planningLoop() {
     }
     const Clock::time_point t0 = Clock::now();
     auto out = controller_->step(in);
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0 - map_wait).count();
     if (!out) {
       const std::lock_guard lock(state_mutex_);
       applyEventLocked(mission::MissionEvent::kNoPath, "planner: " + out.error().message);

@@ -118,6 +118,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::unique_ptr<slam::MappingPipeline> pipeline_;  // mapping thread
   std::unique_ptr<map::MergeWorker> merge_;
   std::optional<explore::ExplorationController> controller_;  // planning thread
+  geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();  // planning thread (set by init() on a resume)
   std::unique_ptr<VehicleSource> source_;
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
@@ -145,7 +146,6 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   mutable std::uint64_t cloud_version_ = 0;
   std::optional<Error> failure_;
   std::uint64_t mapping_errors_ = 0;
-  geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();
 
   std::unique_ptr<TelemetryFiles> telemetry_;  // iterations.csv (planning thread), merges.csv (main thread)
 
