@@ -2,8 +2,8 @@
 
 #include <atomic>
 #include <fstream>
-#include <iterator>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -13,8 +13,11 @@ std::filesystem::path sharedDataDir() { return VOG_SHARED_DATA_DIR; }
 std::filesystem::path sourceDir() { return VOG_SOURCE_DIR; }
 
 std::string readFile(const std::filesystem::path& file) {
+  // Through rdbuf(): g++ 12 flags istreambuf_iterator with a false -Wnull-dereference.
   std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 TempDir::TempDir(const std::string& prefix) {
