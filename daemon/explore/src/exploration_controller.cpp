@@ -137,21 +137,17 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
   auto snapshot = input.map ? input.map() : Result<std::shared_ptr<const map::MergedMap>>(nullptr);
   if (!snapshot) return snapshot.error();
   if (!*snapshot) return out;  // nothing merged yet: the next step tries again
-  if (!returning_ && input.n_submaps >= static_cast<std::size_t>(config_.max_submaps)) {
+  const bool budget_spent = !returning_ && input.n_submaps >= static_cast<std::size_t>(config_.max_submaps);
+  if (returning_ || budget_spent) {
     auto home = planner_->planHome(*snapshot, now);
     if (!home) return home.error();
-    home->reason = "submap budget of " + std::to_string(config_.max_submaps) + " reached";
-    if (home->status != plan::PlanStatus::kComplete) home->reason += "; no way home";
+    if (budget_spent)
+      home->reason = "submap budget of " + std::to_string(config_.max_submaps) + " reached" +
+                     (home->status == plan::PlanStatus::kComplete ? "" : "; no way home");
+    else if (home->status != plan::PlanStatus::kComplete)
+      home->reason = "no way home: " + home->reason;
     out.plan = *home;
-    goHome(Ending::kBudget, *home, out);
-    return out;
-  }
-  if (returning_) {
-    auto home = planner_->planHome(*snapshot, now);
-    if (!home) return home.error();
-    out.plan = *home;
-    if (home->status != plan::PlanStatus::kComplete) home->reason = "no way home: " + home->reason;
-    goHome(home_ending_, *home, out);
+    goHome(budget_spent ? Ending::kBudget : home_ending_, *home, out);
     return out;
   }
   if (revisit_ && input.submaps != nullptr && input.closures != nullptr) {
