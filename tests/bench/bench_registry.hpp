@@ -3,6 +3,8 @@
 //   VOG_BENCH_COMMAND(map, "VOG-Map merge and query benchmark") { ... return exit code; }
 // with `args` (the arguments after the subcommand name) in scope.
 
+#include "vog/eval/figures.hpp"
+
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -25,21 +27,10 @@ struct Registrar {
   Registrar(const char* name, const char* help, CommandFn fn) { registry()[name] = Command{help, fn}; }
 };
 
-// Insertion-ordered flat JSON object of numbers and strings, printed on one line per key.
-class JsonObject {
- public:
-  void add(const std::string& key, double value);
-  void add(const std::string& key, std::int64_t value);
-  void add(const std::string& key, int value) { add(key, static_cast<std::int64_t>(value)); }
-  void add(const std::string& key, const std::string& value);
-  std::string str() const;
-
- private:
-  std::vector<std::pair<std::string, std::string>> fields_;
-};
-
-double median(std::vector<double> values);
-double percentile(std::vector<double> values, double p);  // p in [0, 1]
+// The figures' JSON, medians and percentiles (eval/).
+using eval::JsonObject;
+using eval::median;
+using eval::percentile;
 
 class Stopwatch {
  public:

@@ -42,7 +42,8 @@
 // Run from the repository root (scene paths are relative to it) or pass --scene.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
-#include "reconstruction_eval.hpp"
+#include "vog/eval/closures.hpp"
+#include "vog/eval/reconstruction.hpp"
 
 #include "vog/explore/exploration_controller.hpp"
 #include "vog/map/merge_worker.hpp"
@@ -520,7 +521,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         row.root_shift_m = (tree.front().w.p_world - estimatedPose().translation()).norm();
       if (row.iteration % coverage_every == 0) {
         const vog::bench::Stopwatch coverage_time;
-        row.coverage = vog::bench::coverageOf(*planned_on, observable->points.points, 2 * grid_config.resolution_m);
+        row.coverage = vog::eval::coverageOf(*planned_on, observable->points.points, 2 * grid_config.resolution_m);
         evaluation_s += coverage_time.seconds();
       }
       iterations.push_back(row);
@@ -545,11 +546,11 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (!final_snap) return fail(final_snap.error().message);
   const double mission_wall_s = mission.seconds() - evaluation_s;
   truth_grid.finalize();
-  const vog::bench::ReferenceReconstruction reference(truth_grid);
+  const vog::eval::ReferenceReconstruction reference(truth_grid);
   // The reconstruction is the final map's occupied voxels in every mode: what vogd serves as its cloud.
   std::vector<Eigen::Vector3d> estimate;
-  vog::bench::appendOccupiedCentres(**final_snap, estimate);
-  auto error = vog::bench::reconstructionError(estimate, reference);
+  vog::eval::appendOccupiedCentres(**final_snap, estimate);
+  auto error = vog::eval::reconstructionError(estimate, reference);
   if (!error) return fail(error.error().message);
   // Thesis Fig. 4.12(b): the same run's submaps at their raw odometry poses, loop closures unused.
   std::optional<double> rmse_same_run_odometry;
@@ -564,8 +565,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       if (auto st = (*odometry_map)->add(e); !st) return fail(st.error().message);
     }
     std::vector<Eigen::Vector3d> points;
-    vog::bench::appendOccupiedCentres(**odometry_map, points);
-    auto e = vog::bench::reconstructionError(points, reference);
+    vog::eval::appendOccupiedCentres(**odometry_map, points);
+    auto e = vog::eval::reconstructionError(points, reference);
     if (!e) return fail(e.error().message);
     rmse_same_run_odometry = e->rmse_m;
   }
@@ -574,8 +575,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (mode != Mode::kBaseline && same_run_global_tree) {
     global.finalize();
     std::vector<Eigen::Vector3d> points;
-    vog::bench::appendOccupiedCentres(global, Pose3::Identity(), points);
-    auto e = vog::bench::reconstructionError(points, reference);
+    vog::eval::appendOccupiedCentres(global, Pose3::Identity(), points);
+    auto e = vog::eval::reconstructionError(points, reference);
     if (!e) return fail(e.error().message);
     rmse_same_run_global_tree = e->rmse_m;
   }
@@ -588,7 +589,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   // vog-bench slam judges them: wrong when off by more than 0.2 m or 2 deg in what it asserts.
   struct ClosureRow {
     const slam::LoopClosure* closure;
-    slam::ClosureError error;
+    vog::eval::ClosureError error;
     double correction_m;  // how far the registration moved the relative pose from its prior
   };
   std::vector<ClosureRow> closure_rows;
@@ -598,15 +599,15 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       return queue.T_true_by_stamp.at(pipeline.submaps()[static_cast<std::size_t>(index)].first_stamp_ns);
     };
     const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
-    const slam::ClosureError e = vog::bench::judgeClosure(lc, T_true);
+    const vog::eval::ClosureError e = vog::eval::closureError(lc, T_true);
     closures_wrong += e.wrong ? 1 : 0;
     closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
   }
   std::vector<bool> covered_flags;
   const double coverage =
-      vog::bench::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
+      vog::eval::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
   const double coverage_unaligned =
-      vog::bench::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
+      vog::eval::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
   if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
 
   if (!out_dir.empty()) {

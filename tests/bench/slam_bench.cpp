@@ -8,11 +8,12 @@
 // with the reconstruction of the same scans at their ground-truth poses: RMSE of nearest-point
 // distances after a rigid ICP alignment (as the thesis) and unaligned. A closure is wrong when its
 // relative pose, within the directions it constrains, is off the ground truth by more than 0.2 m or
-// 2 deg (bench::judgeClosure). Deterministic per seed.
+// 2 deg (eval::closureError). Deterministic per seed.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
-#include "reconstruction_eval.hpp"
+#include "vog/eval/closures.hpp"
+#include "vog/eval/reconstruction.hpp"
 
 #include "vog/sim/lockstep.hpp"
 #include "vog/sim/paths.hpp"
@@ -86,7 +87,7 @@ vog::Result<RecordedRun> simulate(const sim::World& world, const std::vector<sim
 }
 
 struct MethodResult {
-  vog::bench::ReconstructionError error;
+  vog::eval::ReconstructionError error;
   double pose_rmse_m = 0.0;  // base-pose position error
   int tried = 0;
   int accepted = 0;
@@ -97,7 +98,7 @@ struct MethodResult {
 };
 
 vog::Result<MethodResult> runMethod(const RecordedRun& run, slam::MappingPipelineConfig config,
-                                    const vog::bench::ReferenceReconstruction& reference) {
+                                    const vog::eval::ReferenceReconstruction& reference) {
   const vog::bench::Stopwatch watch;
   auto p = slam::MappingPipeline::create(config);
   if (!p) return p.error();
@@ -120,17 +121,17 @@ vog::Result<MethodResult> runMethod(const RecordedRun& run, slam::MappingPipelin
   };
   for (const slam::LoopClosure& lc : pipeline.closures()) {
     const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
-    if (vog::bench::judgeClosure(lc, T_true).wrong) ++out.wrong;
+    if (vog::eval::closureError(lc, T_true).wrong) ++out.wrong;
   }
 
   std::vector<Eigen::Vector3d> estimate;
   double se = 0.0;
   for (const vog::map::SubmapEntry& e : pipeline.map().entries()) {
-    vog::bench::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
+    vog::eval::appendOccupiedCentres(*e.grid, e.T_world_submap, estimate);
     se += (e.T_world_submap.translation() - trueBase(static_cast<std::int64_t>(e.id)).translation()).squaredNorm();
   }
   out.pose_rmse_m = std::sqrt(se / static_cast<double>(out.n_submaps));
-  auto err = vog::bench::reconstructionError(estimate, reference);
+  auto err = vog::eval::reconstructionError(estimate, reference);
   if (!err) return err.error();
   out.error = *err;
   return out;
@@ -232,7 +233,7 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
       return fail(st.error().message);
   }
   (*truth_grid)->finalize();
-  const vog::bench::ReferenceReconstruction reference(**truth_grid);
+  const vog::eval::ReferenceReconstruction reference(**truth_grid);
 
   struct Method {
     const char* name;

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Checks that #include "vog/..." lines follow the layering core <- drivers <- daemon:
-#   core:    core/ includes only headers of core/ (not drivers/, daemon/, the simulator, proto/, client/);
-#   drivers: drivers/ includes only headers of core/ and drivers/ (never daemon/);
-#   sim:     daemon/ does not include the simulator (drivers/sim, drivers/vehicle) except vogd's
+# Checks that #include "vog/..." lines follow the layering core <- drivers <- sim, daemon <- eval:
+#   core:    core/ includes only headers of core/;
+#   drivers: drivers/ includes only headers of core/ and drivers/;
+#   sim:     sim/ (the simulated world and vehicle) includes only core/, drivers/ and sim/;
+#   daemon:  daemon/ includes neither the evaluation (eval/) nor the simulator (sim/), except vogd's
 #            simulator source, daemon/app/src/sim_source.cpp and its header.
 # Which folder owns an include prefix vog/<name>/ is read from the tree: the top-level folder of every
 # directory named vog/<name> that holds headers or .proto files (an unknown prefix is an error too).
@@ -14,16 +15,15 @@ root="${1:-$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)}"
 cd "$root"
 
 # The top-level folders that hold sources; build trees and git metadata are not looked at.
-top_dirs=(core drivers daemon client proto)
+top_dirs=(core drivers sim daemon eval client proto)
 sim_exceptions=(daemon/app/src/sim_source.cpp daemon/app/include/vog/app/sim_source.hpp)
 
-# prefix -> owning folder: the top-level folder, or "sim" for the simulator's (drivers/sim, drivers/vehicle).
+# prefix -> owning top-level folder.
 declare -A owner
 while IFS= read -r dir; do
   name="${dir##*/vog/}"
   top="${dir%%/*}"
   folder="$top"
-  case "$dir" in drivers/sim/* | drivers/vehicle/*) folder="sim" ;; esac
   if [[ -n "${owner[$name]:-}" && "${owner[$name]}" != "$folder" ]]; then
     echo "$dir: layout: vog/$name/ is provided by both ${owner[$name]} and $folder" >&2
     exit 1
@@ -65,17 +65,22 @@ while IFS= read -r hit; do
     core)
       [[ "$to" == core ]] || report "$file" "$line" "core" "core/ includes $inc of $to/ (core depends on nothing of ours)" ;;
     drivers)
-      [[ "$to" == core || "$to" == drivers || "$to" == sim ]] ||
+      [[ "$to" == core || "$to" == drivers ]] ||
         report "$file" "$line" "drivers" "drivers/ includes $inc of $to/ (drivers depend on core only)" ;;
+    sim)
+      [[ "$to" == core || "$to" == drivers || "$to" == sim ]] ||
+        report "$file" "$line" "sim" "sim/ includes $inc of $to/ (the simulator depends on core and drivers only)" ;;
     daemon)
-      if [[ "$to" == sim ]]; then
+      if [[ "$to" == eval ]]; then
+        report "$file" "$line" "eval" "daemon/ includes the evaluation's $inc"
+      elif [[ "$to" == sim ]]; then
         allowed=0
         for e in "${sim_exceptions[@]}"; do [[ "$file" == "$e" ]] && allowed=1; done
         [[ $allowed -eq 1 ]] ||
           report "$file" "$line" "sim" "daemon/ includes the simulator's $inc (only vogd's sim_source may)"
       fi ;;
   esac
-done < <(grep -rnE '^[[:space:]]*#[[:space:]]*include[[:space:]]*["<]vog/' core drivers daemon \
+done < <(grep -rnE '^[[:space:]]*#[[:space:]]*include[[:space:]]*["<]vog/' core drivers sim daemon \
            --include='*.hpp' --include='*.h' --include='*.cpp' --include='*.cc' 2>/dev/null | sort)
 
 if [[ $violations -gt 0 ]]; then

@@ -11,7 +11,7 @@
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/pd0.hpp"
 #include "vog/imu/imu_can.hpp"
-#include "vog/mock/sim_wire.hpp"
+#include "vog/vehicle/sim_wire.hpp"
 #include "vog/sonar/sonar_udp.hpp"
 
 #include <gtest/gtest.h>
@@ -61,24 +61,24 @@ sonar::SonarFrame frameAt(std::int64_t t_ns, std::uint32_t index, int n_beams) {
 // come before them; frame 50 has 48 beams; 64 garbage bytes precede the DVL at 8 s.
 std::vector<Chunk> recording() {
   std::vector<Chunk> out;
-  mock::SimWireConfig wire;
+  vehicle::SimWireConfig wire;
   const auto ltp = backseat::LocalTangentPlane::create({42.0, -71.0}).value();
   std::uint32_t imu_seq = 0, ensemble = 0, frame = 0;
   for (std::int64_t t = 0; t <= 20'000 * kMs; t += 10 * kMs) {
     sim::ImuSample imu;
     imu.stamp_ns = t;
-    auto sample = mock::toImuSample(imu, imu_seq++, wire).value();
+    auto sample = vehicle::toImuSample(imu, imu_seq++, wire).value();
     const auto frames = imu::encodeImuCan(sample).value();
     for (const can_frame& f : frames)
       out.push_back({DeviceId::kImu, t, imu::canFramesToBytes(std::span<const can_frame>(&f, 1))});
     if (t % (100 * kMs) == 0) {
-      const double reading = mock::toDigiquartzReading({t, kDepth}, wire).value();
+      const double reading = vehicle::toDigiquartzReading({t, kDepth}, wire).value();
       out.push_back({DeviceId::kDepth, t + 1 * kMs, bytesOf(depth::encodePressureReply(0, 1, reading, 4))});
     }
     if (t % (200 * kMs) == 0) {
       if (t == 8'000 * kMs) out.push_back({DeviceId::kDvl, t + 2 * kMs, std::vector<std::uint8_t>(64, 0x55)});
       sim::DvlSample d{t, true, Eigen::Vector3d(kSpeed, 0, 0), 3.0};
-      const auto e = mock::toPd0Ensemble(d, ++ensemble, wire).value();
+      const auto e = vehicle::toPd0Ensemble(d, ++ensemble, wire).value();
       out.push_back({DeviceId::kDvl, t + 2 * kMs, dvl::encodePd0(e)});
       if (t >= 1'000 * kMs) {
         backseat::NavSentence n;
@@ -123,7 +123,7 @@ FeedRun feedAll(DeviceFeed& feed, const std::vector<Chunk>& chunks) {
 DeviceFeedConfig feedConfig() {
   DeviceFeedConfig c;
   c.origin = {42.0, -71.0};
-  c.depth = mock::SimWireConfig{}.depth;
+  c.depth = vehicle::SimWireConfig{}.depth;
   return c;
 }
 
@@ -224,9 +224,9 @@ TEST(DeviceFeed, DamagedInputIsCountedAndNothingIsMappedFromIt) {
   feed.feed(DeviceId::kSonar, 3 * kMs, cut, out);
   EXPECT_EQ(feed.counters(DeviceId::kSonar).rejected, 1u);
 
-  mock::SimWireConfig wire;
+  vehicle::SimWireConfig wire;
   std::vector<std::uint8_t> pd0 =
-      dvl::encodePd0(mock::toPd0Ensemble({0, true, Eigen::Vector3d(0.2, 0, 0), 3.0}, 1, wire).value());
+      dvl::encodePd0(vehicle::toPd0Ensemble({0, true, Eigen::Vector3d(0.2, 0, 0), 3.0}, 1, wire).value());
   pd0[20] ^= 0xFF;
   feed.feed(DeviceId::kDvl, 4 * kMs, pd0, out);
   EXPECT_EQ(feed.counters(DeviceId::kDvl).messages, 0u);

@@ -18,7 +18,7 @@
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/pd0.hpp"
 #include "vog/imu/imu_can.hpp"
-#include "vog/mock/sim_wire.hpp"
+#include "vog/vehicle/sim_wire.hpp"
 #include "vog/nav/dead_reckoning.hpp"
 #include "vog/sim/nav_model.hpp"
 #include "vog/sim/paths.hpp"
@@ -71,10 +71,10 @@ struct SimRun {
 // must yield exactly one decoded message, which must be accepted.
 class WireFeed {
  public:
-  WireFeed(DeadReckoning& dr, mock::SimWireConfig config) : dr_(dr), config_(std::move(config)) {}
+  WireFeed(DeadReckoning& dr, vehicle::SimWireConfig config) : dr_(dr), config_(std::move(config)) {}
 
   void imu(const sim::ImuSample& s) {
-    auto msg = mock::toImuSample(s, static_cast<std::uint32_t>(imu_sequence_++ & 0xFFU), config_);
+    auto msg = vehicle::toImuSample(s, static_cast<std::uint32_t>(imu_sequence_++ & 0xFFU), config_);
     ASSERT_TRUE(msg.ok()) << msg.error().message;
     auto frames = imu::encodeImuCan(*msg);
     ASSERT_TRUE(frames.ok()) << frames.error().message;
@@ -88,7 +88,7 @@ class WireFeed {
   }
 
   void depth(const sim::DepthSample& s) {
-    auto reading = mock::toDigiquartzReading(s, config_);
+    auto reading = vehicle::toDigiquartzReading(s, config_);
     ASSERT_TRUE(reading.ok()) << reading.error().message;
     const std::string line = depth::encodePressureReply(0, 1, *reading, config_.depth_decimals);
     depth_decoder_.feed(asBytes(line));
@@ -101,7 +101,7 @@ class WireFeed {
   }
 
   void dvl(const sim::DvlSample& s) {
-    auto ensemble = mock::toPd0Ensemble(s, ++dvl_ensemble_, config_);
+    auto ensemble = vehicle::toPd0Ensemble(s, ++dvl_ensemble_, config_);
     ASSERT_TRUE(ensemble.ok()) << ensemble.error().message;
     pd0_decoder_.feed(dvl::encodePd0(*ensemble));
     auto decoded = pd0_decoder_.next();
@@ -120,7 +120,7 @@ class WireFeed {
 
  private:
   DeadReckoning& dr_;
-  mock::SimWireConfig config_;
+  vehicle::SimWireConfig config_;
   std::uint32_t imu_sequence_ = 0;
   std::uint32_t dvl_ensemble_ = 0;
   codec::StreamDecoder<imu::ImuCanCodec> imu_decoder_;
@@ -232,7 +232,7 @@ void runSurvey(std::uint64_t seed, SimRun& out) {
   DeadReckoning dr(deadReckoningConfigFor(sensors));
   ASSERT_TRUE(deadReckoningConfigFor(sensors).validate().ok());
   dr.resetPosition(start.x(), start.y());  // a surface fix at the start
-  WireFeed feed(dr, mock::SimWireConfig{});
+  WireFeed feed(dr, vehicle::SimWireConfig{});
   DriftPredictor predictor(sensors);
 
   const auto period = [](double hz) { return static_cast<std::int64_t>(std::llround(1e9 / hz)); };

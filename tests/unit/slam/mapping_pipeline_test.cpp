@@ -2,6 +2,7 @@
 // are found and accepted, none is wrong (0.2 m / 2 deg of the truth), optimisation lowers the base-pose
 // error below raw odometry, the VogMap holds exactly the optimised poses, and bad input changes nothing.
 #include "pipeline_fixture.hpp"
+#include "vog/eval/closures.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/slam/loop_closer.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
@@ -97,7 +98,7 @@ Outcome runPipeline(LoopClosureMode mode, bool closures) {
     const geometry::Pose3 T_from = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.from)].first_stamp_ns)];
     const geometry::Pose3 T_to = run.truth[testing::scanIndexOf(s[static_cast<std::size_t>(lc.to)].first_stamp_ns)];
     const geometry::Pose3 T_true = T_from.inverse() * T_to;
-    if (closureError(lc, T_true, 0.2, deg2rad(2.0)).wrong) ++out.wrong;
+    if (eval::closureError(lc, T_true).wrong) ++out.wrong;
   }
   const LoopCloseStats& st = out.pipeline->loopStats();
   std::cout << toString(mode) << " closures=" << closures << " submaps=" << n << " tried=" << st.tried

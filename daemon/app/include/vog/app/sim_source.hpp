@@ -1,6 +1,6 @@
 #pragma once
 // SimSource: the built-in simulator as vogd's vehicle (config `source: sim`). A thread steps the
-// lockstep simulation (drivers/sim) and hands odometry and sonar scans to the daemon; the simulated
+// lockstep simulation (sim/world) and hands odometry and sonar scans to the daemon; the simulated
 // vehicle follows the daemon's waypoints as a real vehicle steering on its own dead reckoning would:
 // a waypoint in the odometry frame is reached in truth through the current odometry error.
 //

@@ -100,20 +100,6 @@ struct LoopCloseOutcome {
   LoopCloseStats stats;
 };
 
-// How far an accepted closure is from a known true relative pose (evaluation against ground truth).
-// A partial closure asserts only V_u x = V_u x_icp, and its rows mix metres and radians, so the error
-// is the smallest pose error that explains the constraint's discrepancy r = V_u (x_icp - x_true): the
-// minimum-norm e with V_u e = r under the metric that scales translations by 1 / max_translation_m
-// and rotations by 1 / max_rotation_rad. For a full-rank closure this is simply x_icp - x_true. The
-// closure is wrong when that e exceeds either bound.
-struct ClosureError {
-  double translation_m = 0.0;
-  double rotation_rad = 0.0;
-  bool wrong = false;
-};
-ClosureError closureError(const LoopClosure& closure, const geometry::Pose3& T_from_to_true, double max_translation_m,
-                          double max_rotation_rad);
-
 class LoopCloser {
  public:
   static Result<LoopCloser> create(const LoopCloserConfig& config);
