@@ -1,11 +1,9 @@
 #include "vog/app/daemon.hpp"
 
-#include "vog/app/scan_record.hpp"
 #include "vog/app/device_source.hpp"
 #include "vog/app/sim_source.hpp"
 #include "vog/app/watchdog.hpp"
 #include "vog/core/atomic_file.hpp"
-#include "vog/map/voxel_key.hpp"
 
 #include <asio/executor_work_guard.hpp>
 #include <asio/post.hpp>
@@ -128,7 +126,6 @@ Status Daemon::init() {
   auto pipeline = resumed ? slam::MappingPipeline::restore(config_.mapping, resume.pipeline)
                           : slam::MappingPipeline::create(config_.mapping);
   if (!pipeline) return Error{"mapping: " + pipeline.error().message};
-  pipeline_ = std::move(pipeline).value();
 
   explore::ExplorationConfig ec;
   ec.planner = config_.planner;
@@ -150,7 +147,7 @@ Status Daemon::init() {
   if (resumed) {
     // The vehicle is taken to be at the last waypoint sent (where its controller held it) or, without
     // one, at the newest submap's base.
-    const slam::SubmapRecord& last = pipeline_->submaps().back();
+    const slam::SubmapRecord& last = (*pipeline)->submaps().back();
     const Pose3 T_map_resume =
         resume.waypoint
             ? fromWaypoint(Eigen::Vector3d(resume.waypoint->x_m, resume.waypoint->y_m, resume.waypoint->z_m),
@@ -158,10 +155,10 @@ Status Daemon::init() {
             : last.T_world_base;
     alignment_ =
         SourceAlignment(T_map_resume, last.T_world_base * last.T_world_base_odom.inverse(), last.last_stamp_ns);
-    T_map_home_ = pipeline_->submaps().front().T_world_base;
+    T_map_home_ = (*pipeline)->submaps().front().T_world_base;
     sim_start = geometry::planarPart(T_map_resume) * Pose3(Eigen::Translation3d(0, 0, T_map_resume.translation().z()));
     spdlog::info("mission {}: resumed {} submaps, {} loop closures, state {}", mission_dir_.string(),
-                 pipeline_->submaps().size(), pipeline_->closures().size(), mission::toString(mission_.state()));
+                 (*pipeline)->submaps().size(), (*pipeline)->closures().size(), mission::toString(mission_.state()));
   } else {
     spdlog::info("mission {}: new", mission_dir_.string());
   }
@@ -173,8 +170,8 @@ Status Daemon::init() {
   auto merge = map::MergeWorker::create(grid, config_.merge);
   if (!merge) return Error{"merge: " + merge.error().message};
   merge_ = std::move(merge).value();
-  if (resumed) merge_->submit(pipeline_->map().entries());
-  publishMappingState();
+  mapping_ = std::make_unique<MappingStage>(config_.source == Source::kSim, std::move(pipeline).value(), *store_, *raw_,
+                                            *merge_, [this] { planner_cv_.notify_all(); });
 
   if (config_.source == Source::kSim) {
     auto source = SimSource::create(config_.sim, sim_start);
@@ -241,90 +238,28 @@ void Daemon::mappingLoop() {
     ++mapping_beat_;
     std::optional<QueuedScan> item = scans_.pop(std::chrono::milliseconds(200));
     if (!item) continue;
-    const slam::ScanInput& scan = item->scan;
-    if (config_.source == Source::kSim) {
-      // The simulator's "device" output is the scan itself (scan_record.hpp), with its true pose.
-      const bool mapped = raw_->gate(mapping_enabled_.load(), scan.scan.stamp_ns);
-      raw_->record(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
-      if (item->T_world_vehicle_true)
-        raw_->record(kSimTruthDeviceId, scan.scan.stamp_ns,
-                     encodeTruthRecord({scan.scan.stamp_ns, *item->T_world_vehicle_true}));
-      if (!mapped) {
-        scans_.done(false);
-        continue;
-      }
+    auto mapped = mapping_->process(*item, mapping_enabled_.load());
+    if (!mapped) {
+      fail("mission store", mapped.error());
+      break;
     }
-    auto update = pipeline_->feed(scan);
-    if (!update) {
-      const std::lock_guard lock(state_mutex_);
-      if (mapping_errors_++ < 10)
-        spdlog::warn("mapping: scan at {} ns rejected: {}", scan.scan.stamp_ns, update.error().message);
-    } else if (update->closed_submap || !update->moved.empty()) {
-      if (auto st = persistUpdate(*update); !st) {
-        fail("mission store", st.error());
-        break;
-      }
-    }
-    scans_.done(true);
+    scans_.done(*mapped);
   }
-  // The active submap is closed and stored on a clean shutdown, so nothing mapped is lost.
-  if (!failure_) {
-    auto update = pipeline_->finish();
-    if (!update) {
-      spdlog::warn("mapping: closing the active submap at shutdown: {}", update.error().message);
-    } else if (update->closed_submap) {
-      if (auto st = persistUpdate(*update); !st) spdlog::error("mission store at shutdown: {}", st.error().message);
-    }
+  bool failed = false;
+  {
+    const std::lock_guard lock(state_mutex_);
+    failed = failure_.has_value();
   }
-  if (auto st = raw_->sync(); !st) spdlog::error("raw log: {}", st.error().message);
-}
-
-Status Daemon::persistUpdate(const slam::MappingUpdate& update) {
-  // Durable first (the journal group is the commit), then visible to the merge and the API.
-  if (update.closed_submap) {
-    if (auto st = store_->onUpdate(*pipeline_, update); !st) return st;
-    if (auto st = raw_->sync(); !st) return st;
-    spdlog::info("submap {} closed ({} scans){}", *update.closed_submap, pipeline_->submaps().back().n_scans,
-                 update.closures.empty() ? "" : ", " + std::to_string(update.closures.size()) + " loop closures");
-  }
-  merge_->submit(pipeline_->map().entries());
-  publishMappingState();
-  planner_cv_.notify_all();
-  return {};
-}
-
-void Daemon::publishMappingState() {
-  auto infos = std::make_shared<std::vector<api::SubmapInfo>>();
-  for (const slam::SubmapRecord& r : pipeline_->submaps()) {
-    api::SubmapInfo i;
-    i.id = static_cast<std::uint32_t>(r.index);
-    i.T_world_submap = r.T_world_base;
-    i.n_scans = static_cast<std::uint32_t>(r.n_scans);
-    i.first_stamp_ns = r.first_stamp_ns;
-    i.last_stamp_ns = r.last_stamp_ns;
-    i.closed = true;
-    infos->push_back(i);
-  }
-  auto records = std::make_shared<const std::vector<slam::SubmapRecord>>(pipeline_->submaps());
-  auto pairs = std::make_shared<const std::vector<slam::ClosurePair>>(slam::closurePairs(pipeline_->closures()));
-  const std::lock_guard lock(state_mutex_);
-  submap_infos_ = std::move(infos);
-  submap_records_ = std::move(records);
-  closure_pairs_ = std::move(pairs);
-  n_closures_ = static_cast<std::uint32_t>(pipeline_->closures().size());
-  if (!pipeline_->submaps().empty()) {
-    const slam::SubmapRecord& r = pipeline_->submaps().back();
-    T_map_odom_ = r.T_world_base * r.T_world_base_odom.inverse();
-  }
+  mapping_->finish(!failed);
 }
 
 // ---------------------------------------------------------------- planning thread
 
-Pose3 Daemon::estimatedPose() const { return T_map_odom_ * odometry_.T_odom_vehicle; }
+Pose3 Daemon::estimatedPose() const { return mapping_->state()->T_map_odom * odometry_.T_odom_vehicle; }
 
 Pose3 Daemon::mapFromSource() const {
   const std::lock_guard lock(state_mutex_);
-  return T_map_odom_ * alignment_.T_oldodom_newodom();
+  return mapping_->state()->T_map_odom * alignment_.T_oldodom_newodom();
 }
 
 Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns) {
@@ -386,8 +321,7 @@ void Daemon::planningLoop() {
     std::uint64_t commands = 0;
     mission::Box box;
     explore::StepInput in;
-    std::shared_ptr<const std::vector<slam::SubmapRecord>> records;
-    std::shared_ptr<const std::vector<slam::ClosurePair>> closures;
+    const std::shared_ptr<const MappingState> mapped = mapping_->state();
     {
       std::unique_lock lock(state_mutex_);
       planner_cv_.wait_for(lock, std::chrono::milliseconds(50));
@@ -403,11 +337,9 @@ void Daemon::planningLoop() {
       returning = mission_.state() == mission::MissionState::kReturning;
       commands = commands_;
       box = *mission_.box();  // exploring needs a box (MissionControl)
-      in.n_submaps = submap_infos_ ? submap_infos_->size() : 0;
+      in.n_submaps = mapped->submaps.size();
       in.T_world_vehicle = estimatedPose();
       in.stamp_ns = odometry_.stamp_ns;
-      records = submap_records_;
-      closures = closure_pairs_;
     }
     if (start_now) {
       if (in.n_submaps == 0) T_map_home_ = in.T_world_vehicle;  // home is where a new mission starts
@@ -442,8 +374,8 @@ void Daemon::planningLoop() {
       map_wait += Clock::now() - t;
       return snapshot;
     };
-    in.submaps = records.get();
-    in.closures = closures.get();
+    in.submaps = &mapped->records;
+    in.closures = &mapped->closure_pairs;
     if (in.vehicle_idle || in.obstruction) {
       const std::lock_guard lock(state_mutex_);
       planner_state_ = api::PlannerState::kPlanning;
@@ -632,8 +564,9 @@ api::StatusReport Daemon::status() const {
   s.T_world_vehicle = estimatedPose();
   s.sigma_xyz_m = odometry_.sigma_xyz_m;
   s.sigma_yaw_rad = odometry_.sigma_yaw_rad;
-  s.n_submaps = submap_infos_ ? static_cast<std::uint32_t>(submap_infos_->size()) : 0;
-  s.n_closures = n_closures_;
+  const std::shared_ptr<const MappingState> mapped = mapping_->state();
+  s.n_submaps = static_cast<std::uint32_t>(mapped->submaps.size());
+  s.n_closures = mapped->n_closures;
   s.planner_state = planner_state_;
   if (auto snap = merge_->snapshot()) s.map_version = snap->version();
   return s;
@@ -641,32 +574,9 @@ api::StatusReport Daemon::status() const {
 
 std::shared_ptr<const map::MergedMap> Daemon::mapSnapshot() const { return merge_->snapshot(); }
 
-std::vector<api::SubmapInfo> Daemon::submaps() const {
-  const std::lock_guard lock(state_mutex_);
-  return submap_infos_ ? *submap_infos_ : std::vector<api::SubmapInfo>{};
-}
+std::vector<api::SubmapInfo> Daemon::submaps() const { return mapping_->state()->submaps; }
 
-std::shared_ptr<const api::Cloud> Daemon::cloud() const {
-  // The reconstruction: centres of the merged map's occupied voxels, built once per map version.
-  const auto snap = merge_->snapshot();
-  if (!snap) return nullptr;
-  {
-    const std::lock_guard lock(state_mutex_);
-    if (cloud_ && cloud_version_ == snap->version()) return cloud_;
-  }
-  auto cloud = std::make_shared<api::Cloud>();
-  const double res = snap->resolution();
-  snap->forEachKnown([&](const map::VoxelKey& key, const map::VoxelValue& value) {
-    if (value.status != map::Occupancy::kOccupied) return;
-    api::CloudPoint p;
-    p.p_world_m = map::keyToCentre(key, res).cast<float>();
-    cloud->push_back(p);
-  });
-  const std::lock_guard lock(state_mutex_);
-  cloud_ = std::move(cloud);
-  cloud_version_ = snap->version();
-  return cloud_;
-}
+std::shared_ptr<const api::Cloud> Daemon::cloud() const { return cloud_.of(merge_->snapshot()); }
 
 Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
   std::optional<mission::Box> box;

@@ -1,11 +1,15 @@
-// The parts of vogd's daemon that own their own state, without threads: the resumed source's
-// alignment and the thread watchdog.
+// The parts of vogd's daemon that own their own state, without their threads: the resumed source's
+// alignment, the thread watchdog, the scan queue, the raw recorder's gate, the mapping stage and the
+// API's reconstruction cloud.
+#include "vog/app/mapping_stage.hpp"
 #include "vog/app/raw_recorder.hpp"
+#include "vog/app/reconstruction_cloud.hpp"
 #include "vog/app/scan_queue.hpp"
 #include "vog/app/scan_record.hpp"
 #include "vog/app/source_alignment.hpp"
 #include "vog/app/watchdog.hpp"
 
+#include "synthetic_scene.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -188,6 +192,114 @@ TEST(RawRecorder, TheMappingGateIsRecordedWhenItChangesBeforeTheInputsItGates) {
   for (const mission::RawRecord& rec : contents.records)
     gates.push_back(rec.device_id == kMappingGateDeviceId ? rec.bytes.at(0) : -1);
   EXPECT_EQ(gates, (std::vector<int>{0, -1, -1, 1, -1, -1, 0, -1}));
+}
+
+// A pier survey of 25 scans in submaps of 10, through the mapping stage with the simulator's
+// recording: outside the mission a scan is recorded only; every closed submap is on disk (its grid and
+// its journal group) before the published state lists it; finish() stores the active submap.
+TEST(MappingStage, ASubmapIsDurableBeforeItIsPublishedAndTheActiveOneIsStoredAtTheEnd) {
+  test::TempDir dir("mapping-stage");
+  slam::MappingPipelineConfig config;
+  config.builder.max_scans = 10;
+  auto store = mission::MissionStore::open(dir.path() / "mission", config.builder.grid).value();
+  RawRecorder raw(mission::RawLog::open(dir.path() / "mission" / mission::MissionStore::kRawLogFile).value());
+  auto merge = map::MergeWorker::create(config.builder.grid, map::MergeConfig{}).value();
+  int published = 0;
+  std::size_t stored_when_published = 0;
+  auto stored = [&] {
+    std::size_t n = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path() / "mission" / "submaps"))
+      n += e.is_regular_file() ? 1 : 0;
+    return n;
+  };
+  MappingStage stage(true, slam::MappingPipeline::create(config).value(), *store, raw, *merge, [&] {
+    ++published;
+    stored_when_published = stored();
+  });
+  EXPECT_EQ(published, 1);  // the empty state
+  EXPECT_TRUE(stage.state()->submaps.empty());
+
+  const test::SyntheticScene scene = test::SyntheticScene::pier();
+  const std::vector<Pose3> orbit = test::orbitTrajectory(30, 5.5, -2.0);
+  std::mt19937_64 rng(7);
+  for (int k = 0; k < 30; ++k) {
+    QueuedScan item;
+    item.scan.T_world_vehicle_odom = orbit[static_cast<std::size_t>(k)];
+    item.scan.z_roll_pitch = Eigen::Vector3d(orbit[static_cast<std::size_t>(k)].translation().z(), 0.0, 0.0);
+    item.scan.scan = scene.scan(orbit[static_cast<std::size_t>(k)], config.builder.fan, 0.0, rng);
+    item.scan.scan.stamp_ns = (k + 1) * 200'000'000LL;
+    item.T_world_vehicle_true = orbit[static_cast<std::size_t>(k)];
+    const bool in_mission = k >= 5;  // the first five scans come before the mission starts
+    auto mapped = stage.process(item, in_mission);
+    ASSERT_TRUE(mapped.ok()) << mapped.error().message;
+    EXPECT_EQ(*mapped, in_mission) << k;
+    EXPECT_EQ(stored_when_published, stage.state()->submaps.size()) << "published before it was durable, scan " << k;
+  }
+  EXPECT_EQ(stage.state()->submaps.size(), 2u);  // 25 scans mapped: two full submaps, five in the active one
+  const std::shared_ptr<const MappingState> before = stage.state();
+  const slam::SubmapRecord& last = before->records.back();
+  expectPosesNear(before->T_map_odom, last.T_world_base * last.T_world_base_odom.inverse());
+  EXPECT_EQ(before->submaps.back().id, 1u);
+  EXPECT_EQ(stage.rejectedScans(), 0u);
+
+  stage.finish(true);
+  EXPECT_EQ(stage.state()->submaps.size(), 3u);
+  EXPECT_EQ(stored(), 3u);
+  EXPECT_EQ(before->submaps.size(), 2u) << "a published state never changes";
+  // The raw log: every scan and its truth, the gate closed for the first five and open after.
+  const mission::RawLogContents log =
+      mission::readRawLog(dir.path() / "mission" / mission::MissionStore::kRawLogFile).value();
+  int scans = 0, truths = 0;
+  std::vector<int> gates;
+  for (const mission::RawRecord& r : log.records) {
+    scans += r.device_id == kSimScanDeviceId ? 1 : 0;
+    truths += r.device_id == kSimTruthDeviceId ? 1 : 0;
+    if (r.device_id == kMappingGateDeviceId) gates.push_back(r.bytes.at(0));
+  }
+  EXPECT_EQ(scans, 30);
+  EXPECT_EQ(truths, 30);
+  EXPECT_EQ(gates, (std::vector<int>{0, 1}));
+  ASSERT_TRUE(merge->waitIdle().ok());
+  EXPECT_EQ(merge->snapshot()->submapCount(), 3u);
+  merge->stop();
+}
+
+// The cloud is the merged map's occupied voxel centres, built once per map version.
+TEST(ReconstructionCloud, HoldsTheOccupiedVoxelCentresAndIsBuiltOncePerVersion) {
+  map::GridConfig grid;
+  auto merged = map::MergedMap::create(grid).value();
+  auto local = map::LocalGrid::create(grid).value();
+  const test::SyntheticScene scene = test::SyntheticScene::pier();
+  std::mt19937_64 rng(3);
+  const geometry::SonarFan fan;
+  const std::vector<Pose3> orbit = test::orbitTrajectory(8, 5.5, -2.0);
+  for (const Pose3& T : orbit)
+    ASSERT_TRUE(local->insertScan(T * fan.T_vehicle_sensor, fan, scene.scan(T, fan, 0.0, rng)).ok());
+  local->finalize();
+  map::SubmapEntry entry;
+  entry.grid = std::move(local);
+  ASSERT_TRUE(merged->add(entry).ok());
+  const auto snapshot = merged->snapshot();
+
+  ReconstructionCloud cloud;
+  EXPECT_EQ(cloud.of(nullptr), nullptr);
+  const auto a = cloud.of(snapshot);
+  ASSERT_NE(a, nullptr);
+  std::size_t occupied = 0;
+  const double res = snapshot->resolution();
+  snapshot->forEachKnown([&](const map::VoxelKey& key, const map::VoxelValue& v) {
+    if (v.status != map::Occupancy::kOccupied) return;
+    ASSERT_LT(occupied, a->size());
+    EXPECT_EQ((*a)[occupied].p_world_m, map::keyToCentre(key, res).cast<float>());
+    ++occupied;
+  });
+  EXPECT_GT(occupied, 50u);
+  EXPECT_EQ(a->size(), occupied);
+  EXPECT_EQ(cloud.of(snapshot), a) << "the same version is served from the cache";
+  ASSERT_TRUE(merged->remove(0).ok());
+  const auto b = cloud.of(merged->snapshot());
+  EXPECT_NE(b, a);
+  EXPECT_TRUE(b->empty());
 }
 
 }  // namespace

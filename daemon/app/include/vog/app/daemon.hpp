@@ -19,9 +19,10 @@
 // odometry base pose). After a restart SourceAlignment brings the source's new frame and clock into
 // the mission's.
 //
-// Parts with their own state: ExplorationController (the loop's policy), ScanQueue (source ->
-// mapping), RawRecorder (the raw log and the mapping gate), SourceAlignment, TelemetryFiles
-// (iterations.csv, merges.csv) and Watchdog (thread heartbeats for systemd).
+// Parts with their own state: MappingStage (the mapping thread's pipeline, persistence and published
+// state), ExplorationController (the loop's policy), ScanQueue (source -> mapping), RawRecorder (the
+// raw log and the mapping gate), SourceAlignment, TelemetryFiles (iterations.csv, merges.csv),
+// ReconstructionCloud (the API's cloud) and Watchdog (thread heartbeats for systemd).
 //
 // Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
 // until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
@@ -29,7 +30,9 @@
 
 #include "vog/api/api_server.hpp"
 #include "vog/api/domain.hpp"
+#include "vog/app/mapping_stage.hpp"
 #include "vog/app/raw_recorder.hpp"
+#include "vog/app/reconstruction_cloud.hpp"
 #include "vog/app/scan_queue.hpp"
 #include "vog/app/source_alignment.hpp"
 #include "vog/app/systemd_notify.hpp"
@@ -91,9 +94,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   void mappingLoop();
   void planningLoop();
-  Status persistUpdate(const slam::MappingUpdate& update);
-  void publishMappingState();
-  geometry::Pose3 estimatedPose() const;  // map frame
+  geometry::Pose3 estimatedPose() const;  // map frame; the caller holds state_mutex_
   geometry::Pose3 mapFromSource() const;  // T_map_source: the source's odometry frame in the map (locks state)
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
   // Logs and journals a mission state; the caller holds state_mutex_.
@@ -112,10 +113,10 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   // Components.
   std::unique_ptr<mission::MissionStore> store_;
-  std::unique_ptr<RawRecorder> raw_;                 // the raw log (its own lock)
-  std::atomic<bool> mapping_enabled_{false};         // the mission is exploring, returning or paused
-  bool chunk_gate_ = false;                          // source thread: the gate of the chunk being decoded
-  std::unique_ptr<slam::MappingPipeline> pipeline_;  // mapping thread
+  std::unique_ptr<RawRecorder> raw_;          // the raw log (its own lock)
+  std::atomic<bool> mapping_enabled_{false};  // the mission is exploring, returning or paused
+  bool chunk_gate_ = false;                   // source thread: the gate of the chunk being decoded
+  std::unique_ptr<MappingStage> mapping_;     // process()/finish(): mapping thread; state(): any
   std::unique_ptr<map::MergeWorker> merge_;
   std::optional<explore::ExplorationController> controller_;  // planning thread
   geometry::Pose3 T_map_home_ = geometry::Pose3::Identity();  // planning thread (set by init() on a resume)
@@ -123,7 +124,8 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   asio::io_context io_;
   std::unique_ptr<api::ApiServer> api_;
 
-  ScanQueue scans_{256};  // source -> mapping (its own lock)
+  ScanQueue scans_{256};               // source -> mapping (its own lock)
+  mutable ReconstructionCloud cloud_;  // the API's cloud (its own lock)
 
   // Shared state, guarded by state_mutex_.
   mutable std::mutex state_mutex_;
@@ -136,16 +138,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   SourceAlignment alignment_;   // a resumed source's frame and clock
   bool have_odometry_ = false;  // a sample arrived since launch
   OdometrySample odometry_;     // newest, aligned
-  geometry::Pose3 T_map_odom_ = geometry::Pose3::Identity();
-  std::shared_ptr<const std::vector<api::SubmapInfo>> submap_infos_;
-  std::uint32_t n_closures_ = 0;
-  // What the revisit policy reads (copies published by the mapping thread).
-  std::shared_ptr<const std::vector<slam::SubmapRecord>> submap_records_;
-  std::shared_ptr<const std::vector<slam::ClosurePair>> closure_pairs_;
-  mutable std::shared_ptr<const api::Cloud> cloud_;  // cache for the snapshot version below
-  mutable std::uint64_t cloud_version_ = 0;
   std::optional<Error> failure_;
-  std::uint64_t mapping_errors_ = 0;
 
   std::unique_ptr<TelemetryFiles> telemetry_;  // iterations.csv (planning thread), merges.csv (main thread)
 

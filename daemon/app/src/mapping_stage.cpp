@@ -1,0 +1,102 @@
+#include "vog/app/mapping_stage.hpp"
+
+#include "vog/app/scan_record.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <string>
+#include <utility>
+
+namespace vog::app {
+
+MappingStage::MappingStage(bool record_scans, std::unique_ptr<slam::MappingPipeline> pipeline,
+                           mission::MissionStore& store, RawRecorder& raw, map::MergeWorker& merge,
+                           std::function<void()> published)
+    : record_scans_(record_scans),
+      pipeline_(std::move(pipeline)),
+      store_(store),
+      raw_(raw),
+      merge_(merge),
+      published_(std::move(published)) {
+  if (!pipeline_->submaps().empty()) merge_.submit(pipeline_->map().entries());
+  publish();
+}
+
+Result<bool> MappingStage::process(const QueuedScan& item, bool mapping_enabled) {
+  const slam::ScanInput& scan = item.scan;
+  if (record_scans_) {
+    // The simulator's "device" output is the scan itself (scan_record.hpp), with its true pose.
+    const bool mapped = raw_.gate(mapping_enabled, scan.scan.stamp_ns);
+    raw_.record(kSimScanDeviceId, scan.scan.stamp_ns, encodeScanRecord(scan));
+    if (item.T_world_vehicle_true)
+      raw_.record(kSimTruthDeviceId, scan.scan.stamp_ns,
+                  encodeTruthRecord({scan.scan.stamp_ns, *item.T_world_vehicle_true}));
+    if (!mapped) return false;
+  }
+  auto update = pipeline_->feed(scan);
+  if (!update) {
+    if (rejected_scans_++ < 10)
+      spdlog::warn("mapping: scan at {} ns rejected: {}", scan.scan.stamp_ns, update.error().message);
+  } else if (update->closed_submap || !update->moved.empty()) {
+    if (auto st = persist(*update); !st) return st.error();
+  }
+  return true;
+}
+
+void MappingStage::finish(bool store_active) {
+  if (store_active) {
+    auto update = pipeline_->finish();
+    if (!update) {
+      spdlog::warn("mapping: closing the active submap at shutdown: {}", update.error().message);
+    } else if (update->closed_submap) {
+      if (auto st = persist(*update); !st) spdlog::error("mission store at shutdown: {}", st.error().message);
+    }
+  }
+  if (auto st = raw_.sync(); !st) spdlog::error("raw log: {}", st.error().message);
+}
+
+std::shared_ptr<const MappingState> MappingStage::state() const {
+  const std::lock_guard lock(mutex_);
+  return state_;
+}
+
+Status MappingStage::persist(const slam::MappingUpdate& update) {
+  // Durable first (the journal group is the commit), then visible to the merge and the API.
+  if (update.closed_submap) {
+    if (auto st = store_.onUpdate(*pipeline_, update); !st) return st;
+    if (auto st = raw_.sync(); !st) return st;
+    spdlog::info("submap {} closed ({} scans){}", *update.closed_submap, pipeline_->submaps().back().n_scans,
+                 update.closures.empty() ? "" : ", " + std::to_string(update.closures.size()) + " loop closures");
+  }
+  merge_.submit(pipeline_->map().entries());
+  publish();
+  return {};
+}
+
+void MappingStage::publish() {
+  auto s = std::make_shared<MappingState>();
+  for (const slam::SubmapRecord& r : pipeline_->submaps()) {
+    api::SubmapInfo i;
+    i.id = static_cast<std::uint32_t>(r.index);
+    i.T_world_submap = r.T_world_base;
+    i.n_scans = static_cast<std::uint32_t>(r.n_scans);
+    i.first_stamp_ns = r.first_stamp_ns;
+    i.last_stamp_ns = r.last_stamp_ns;
+    i.closed = true;
+    s->submaps.push_back(i);
+  }
+  s->records = pipeline_->submaps();
+  s->closure_pairs = slam::closurePairs(pipeline_->closures());
+  s->n_closures = static_cast<std::uint32_t>(pipeline_->closures().size());
+  if (!pipeline_->submaps().empty()) {
+    const slam::SubmapRecord& r = pipeline_->submaps().back();
+    s->T_map_odom = r.T_world_base * r.T_world_base_odom.inverse();
+  }
+  {
+    const std::lock_guard lock(mutex_);
+    state_ = std::move(s);
+  }
+  if (published_) published_();
+}
+
+}  // namespace vog::app
