@@ -292,17 +292,20 @@ void Daemon::recordStateLocked(mission::MissionState state) {
 }
 
 void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& reason) {
-  switch (event) {
-    case mission::MissionEvent::kExplorationDone:
-      spdlog::info("planner: exploration ends ({}); returning home", reason);
-      break;
-    case mission::MissionEvent::kArrivedHome: break;
-    case mission::MissionEvent::kNoPath:
-      spdlog::warn("planner: {}", reason);
-      mission_.setAbortReason(reason);
-      break;
-  }
-  recordStateLocked(mission_.event(event));
+  const mission::MissionState before = mission_.state();
+  if (event == mission::MissionEvent::kNoPath && mission_.active()) mission_.setAbortReason(reason);
+  const mission::MissionState after = mission_.event(event);
+  if (after == before) return;  // raced with a command (MissionControl ignores it): nothing to journal
+  if (event == mission::MissionEvent::kExplorationDone)
+    spdlog::info("planner: exploration ends ({}); returning home", reason);
+  if (event == mission::MissionEvent::kNoPath) spdlog::warn("planner: {}", reason);
+  recordStateLocked(after);
+}
+
+void Daemon::followControllerLocked() {
+  for (const mission::MissionEvent event : controller_->eventsFor(mission_.state()))
+    applyEventLocked(event,
+                     event == mission::MissionEvent::kExplorationDone ? controller_->reason() : controller_->summary());
 }
 
 std::shared_ptr<const map::MergedMap> Daemon::planningSnapshot() {
@@ -350,11 +353,9 @@ void Daemon::planningLoop() {
       }
     }
     if (!controller_->active()) {
-      // Ended while a command held the mission (its event was not applied then): end it now.
-      if (const auto event = controller_->endingEvent()) {
-        const std::lock_guard lock(state_mutex_);
-        applyEventLocked(*event, controller_->summary());
-      }
+      // Ended while a command held the mission (its events were not applied then): end it now.
+      const std::lock_guard lock(state_mutex_);
+      followControllerLocked();
       continue;
     }
     if (hold_now) controller_->hold();
@@ -397,7 +398,7 @@ void Daemon::planningLoop() {
     bool send = false;
     {
       const std::lock_guard lock(state_mutex_);
-      if (out->event) applyEventLocked(*out->event, out->reason);
+      followControllerLocked();
       // A command accepted meanwhile (pause, abort, return home) overrides this step's waypoints.
       send = out->waypoints && commands == commands_ && (mission_.active() || out->waypoints->empty());
       if (mission_.active())

@@ -83,6 +83,18 @@ std::optional<mission::MissionEvent> ExplorationController::endingEvent() const 
   return std::nullopt;
 }
 
+std::vector<mission::MissionEvent> ExplorationController::eventsFor(mission::MissionState state) const {
+  using mission::MissionEvent;
+  using mission::MissionState;
+  if (state != MissionState::kExploring && state != MissionState::kReturning) return {};
+  const std::optional<MissionEvent> ending = endingEvent();
+  if (ending == MissionEvent::kNoPath) return {MissionEvent::kNoPath};
+  std::vector<MissionEvent> out;
+  if (state == MissionState::kExploring && (returning_ || ending)) out.push_back(MissionEvent::kExplorationDone);
+  if (ending) out.push_back(*ending);
+  return out;
+}
+
 void ExplorationController::end(Ending ending, std::string reason, StepOutput& out) {
   ending_ = ending;
   reason_ = std::move(reason);

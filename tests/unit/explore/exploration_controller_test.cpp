@@ -158,6 +158,46 @@ TEST(ExplorationController, NothingLeftToExploreGoesHomeAndEndsComplete) {
   EXPECT_FALSE(c.step(v.input(fullRoom())).value().waypoints.has_value());
 }
 
+// The operator pauses between the step that turns home and the mission hearing of it: the state
+// machine ignores the event (it raced with the command). Applying only what the steps said would
+// leave the mission exploring for ever, its arrival ignored too; eventsFor() says what is still to be
+// heard once the mission moves again, and nothing while it is held or over.
+TEST(ExplorationController, EventsThatRacedWithAPauseAreHeardWhenTheMissionMovesAgain) {
+  auto c = ExplorationController::create(roomConfig()).value();
+  SimVehicle v;
+  const Pose3 home = poseOf({-3.0, -1.5, -1.75}, 0.0);
+  ASSERT_TRUE(c.start(home, kBox, 0, false).ok());
+  v.T = poseOf({3.0, 1.5, -1.2}, 2.9);
+  mission::MissionControl m(kBox, mission::MissionState::kExploring);
+  EXPECT_TRUE(c.eventsFor(m.state()).empty());
+  const StepOutput turn = c.step(v.input(fullRoom())).value();
+  ASSERT_EQ(turn.event, mission::MissionEvent::kExplorationDone);
+  ASSERT_TRUE(m.command(mission::MissionCommandKind::kPause).ok());
+  EXPECT_EQ(m.event(*turn.event), mission::MissionState::kPaused);  // lost in the race
+  EXPECT_TRUE(c.eventsFor(m.state()).empty());                      // held: nothing applies
+  ASSERT_TRUE(m.command(mission::MissionCommandKind::kResume).ok());
+  ASSERT_EQ(m.state(), mission::MissionState::kExploring);
+  // The vehicle goes on home and arrives while the mission still says exploring.
+  v.apply(turn);
+  StepOutput arrived;
+  for (int i = 0; i < 10 && !arrived.event; ++i) {
+    v.advance();
+    arrived = c.step(v.input(fullRoom())).value();
+  }
+  ASSERT_EQ(arrived.event, mission::MissionEvent::kArrivedHome);
+  mission::MissionControl steps_only = m;
+  EXPECT_EQ(steps_only.event(*arrived.event), mission::MissionState::kExploring) << "the step's event alone is lost";
+  const std::vector<mission::MissionEvent> pending = c.eventsFor(m.state());
+  EXPECT_EQ(pending, (std::vector<mission::MissionEvent>{mission::MissionEvent::kExplorationDone,
+                                                         mission::MissionEvent::kArrivedHome}));
+  for (const mission::MissionEvent e : pending) m.event(e);
+  EXPECT_EQ(m.state(), mission::MissionState::kComplete);
+  EXPECT_TRUE(c.eventsFor(m.state()).empty());  // over: the ending is not heard again
+  // On the way home (the operator's word) only the arrival is to be heard.
+  mission::MissionControl returning(kBox, mission::MissionState::kReturning);
+  EXPECT_EQ(c.eventsFor(returning.state()), (std::vector<mission::MissionEvent>{mission::MissionEvent::kArrivedHome}));
+}
+
 TEST(ExplorationController, TheSubmapBudgetEndsTheExplorationOnTheWayHome) {
   ExplorationConfig config = roomConfig();
   config.max_submaps = 5;

@@ -99,8 +99,13 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
   // Logs and journals a mission state; the caller holds state_mutex_.
   void recordStateLocked(mission::MissionState state);
-  // Applies an event of the exploration (with its reason for kNoPath); the caller holds state_mutex_.
+  // Applies an event of the exploration (with its reason for kNoPath), journalling the state when it
+  // changed; the caller holds state_mutex_.
   void applyEventLocked(mission::MissionEvent event, const std::string& reason);
+  // Applies what the mission state machine has not heard from the controller yet (its events raced
+  // with a command such as a pause are applied once the mission moves again); the caller holds
+  // state_mutex_.
+  void followControllerLocked();
   // The merged map the planner plans on; as fast as possible (simulator, speedup 0) it first waits
   // until every scan taken so far is mapped and merged, as in a lockstep run. Planning thread.
   std::shared_ptr<const map::MergedMap> planningSnapshot();

@@ -57,7 +57,7 @@ class MappingStage {
 
   std::shared_ptr<const MappingState> state() const;
   const slam::MappingPipeline& pipeline() const { return *pipeline_; }  // mapping thread
-  std::uint64_t rejectedScans() const { return rejected_scans_; }      // mapping thread
+  std::uint64_t rejectedScans() const { return rejected_scans_; }       // mapping thread
 
  private:
   Status persist(const slam::MappingUpdate& update);

@@ -15,7 +15,9 @@
 //              path on or home (kNoPath), or the planner kept answering without the vehicle moving
 //              (kStalled).
 // Events for the mission state machine (mission::MissionControl) come out with the step that
-// caused them: kExplorationDone when it turns home, kArrivedHome, kNoPath.
+// caused them: kExplorationDone when it turns home, kArrivedHome, kNoPath. A caller whose operator
+// can hold the mission between a step and its event (vogd: a pause the state machine answers by
+// ignoring the event) asks eventsFor() instead, which says what the mission still has to hear.
 //
 // Frames: everything is in the map frame (the optimised estimate); the caller converts waypoints to
 // whatever its vehicle steers in.
@@ -126,6 +128,10 @@ class ExplorationController {
   std::string summary() const;
   // The mission event the ending stands for (kArrivedHome, kNoPath); none while the mission goes on.
   std::optional<mission::MissionEvent> endingEvent() const;
+  // The events that bring a mission in `state` in line with this controller, in order: none while
+  // the mission is held (paused) or over; kExplorationDone when it still explores but the controller
+  // turned home; then the ending's event. Each of them changes `state` when applied in order.
+  std::vector<mission::MissionEvent> eventsFor(mission::MissionState state) const;
   // The planner of the current mission (null before start()): its last tree and grid, for plots.
   const plan::NbvPlanner* planner() const { return planner_.get(); }
   int revisits() const { return revisit_ ? revisit_->revisits() : 0; }
