@@ -73,7 +73,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
   for (int s = 0; s < opt.submaps - held; ++s) (void)writer->add(entries[static_cast<std::size_t>(s)]);
 
   // Traversability: full build, then incremental update after one more submap (vs rebuild).
-  const Eigen::Vector3d checked_box = plan::anyHeadingBox(config.collision_box_m, config.clearance_m);
+  const plan::Footprint checked_box = plan::anyHeadingFootprint(config.collision_box_m, config.clearance_m);
   std::vector<double> build_ms;
   std::vector<double> update_ms;
   std::vector<double> rebuild_ms;

@@ -106,7 +106,7 @@ Status NbvPlanner::syncTraversability(const map::MergedMap& map) {
     if (grid_->update(map).ok()) return {};
   }
   const Eigen::AlignedBox3d box(config_.box_min_world_m, config_.box_max_world_m);
-  auto built = TraversabilityGrid::build(map, box, anyHeadingBox(config_.collision_box_m, config_.clearance_m),
+  auto built = TraversabilityGrid::build(map, box, anyHeadingFootprint(config_.collision_box_m, config_.clearance_m),
                                          {home_.p_world, config_.assume_free_radius_m});
   if (!built.ok()) return built.error();
   grid_.emplace(std::move(built.value()));
@@ -142,9 +142,8 @@ void NbvPlanner::addNode(const map::MergedMap& map, int parent, const Waypoint& 
   tree_.push_back(n);
 }
 
-Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m, double clearance_m) {
-  const double side_xy = collision_box_m.head<2>().norm();
-  return {side_xy + 2.0 * clearance_m, side_xy + 2.0 * clearance_m, collision_box_m.z()};
+Footprint anyHeadingFootprint(const Eigen::Vector3d& collision_box_m, double clearance_m) {
+  return Footprint::cylinder(collision_box_m.head<2>().norm() + 2.0 * clearance_m, collision_box_m.z());
 }
 
 Status NbvPlanner::prepare(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current,

@@ -96,13 +96,14 @@ void windowOr(int lo, int hi, int r, Get&& get, Put&& put) {
 }  // namespace
 
 Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const Eigen::AlignedBox3d& box_world,
-                                                     const Eigen::Vector3d& collision_box_m,
-                                                     const AssumedFree& assumed_free) {
+                                                     const Footprint& footprint, const AssumedFree& assumed_free) {
   if (!box_world.min().allFinite() || !box_world.max().allFinite() ||
       (box_world.max().array() <= box_world.min().array()).any())
     return Error{"traversability: the exploration box is empty or not finite"};
-  if (!collision_box_m.allFinite() || (collision_box_m.array() <= 0.0).any())
-    return Error{"traversability: the collision box must be finite and > 0 on every axis"};
+  if (!footprint.size_m.allFinite() || (footprint.size_m.array() <= 0.0).any())
+    return Error{"traversability: the footprint must be finite and > 0 on every axis"};
+  if (footprint.vertical_cylinder && footprint.size_m.x() != footprint.size_m.y())
+    return Error{"traversability: a cylinder's footprint has one diameter (x and y differ)"};
   TraversabilityGrid g;
   g.resolution_ = map.resolution();
   g.inv_resolution_ = 1.0 / g.resolution_;
@@ -110,7 +111,14 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
   g.box_world_ = box_world;
   for (int i = 0; i < 3; ++i) {
     // A box centred anywhere in voxel v reaches at most floor(h / res) + 1 voxels past v.
-    g.r_[i] = static_cast<int>(std::floor(0.5 * collision_box_m[i] * g.inv_resolution_)) + 1;
+    g.r_[i] = static_cast<int>(std::floor(0.5 * footprint.size_m[i] * g.inv_resolution_)) + 1;
+  }
+  if (footprint.vertical_cylinder) {
+    const double rho = 0.5 * footprint.size_m.x() * g.inv_resolution_;
+    for (int k = 0; k <= g.r_.y(); ++k) {
+      const double m = std::max(k - 1, 0);
+      g.disc_half_width_.push_back(static_cast<int>(std::floor(std::sqrt(std::max(rho * rho - m * m, 0.0)))) + 1);
+    }
   }
   KeyBox box_keys;
   box_keys.min = map::pointToKey(box_world.min(), g.inv_resolution_);
@@ -191,39 +199,71 @@ void TraversabilityGrid::addContact(const Eigen::Vector3d& p_world) {
 void TraversabilityGrid::recompute(KeyBox region) {
   region = intersect(region, grid_);
   if (region.empty()) return;
-  // Pass 1 (x) over the region widened in y and z, pass 2 (y) widened in z, pass 3 (z) on the region.
-  KeyBox a = region;
-  a.min.y() -= r_.y();
-  a.max.y() += r_.y();
-  a.min.z() -= r_.z();
-  a.max.z() += r_.z();
-  a = intersect(a, grid_);
+  // oy: a blocked voxel within the footprint's horizontal extent, over the region widened in z; then
+  // the vertical pass on the region. Outside the grid counts as blocked.
   KeyBox b = region;
   b.min.z() -= r_.z();
   b.max.z() += r_.z();
   b = intersect(b, grid_);
-
-  Volume ox(a);
-  for (int z = a.min.z(); z <= a.max.z(); ++z)
-    for (int y = a.min.y(); y <= a.max.y(); ++y) {
-      const std::size_t row = indexOf(VoxelKey(grid_.min.x(), y, z));
-      windowOr(
-          region.min.x(), region.max.x(), r_.x(),
-          [&](int x) -> int {
-            return x < grid_.min.x() || x > grid_.max.x()
-                       ? 1
-                       : (status_[row + static_cast<std::size_t>(x - grid_.min.x())] != kFree ? 1 : 0);
-          },
-          [&](int x, bool v) { ox.v[ox.index(x, y, z)] = v ? 1 : 0; });
-    }
+  auto blockedAt = [&](int x, int y, int z) -> int {
+    const VoxelKey k(x, y, z);
+    return grid_.contains(k) ? (status_[indexOf(k)] != kFree ? 1 : 0) : 1;
+  };
   Volume oy(b);
-  for (int z = b.min.z(); z <= b.max.z(); ++z)
-    for (int x = region.min.x(); x <= region.max.x(); ++x) {
-      windowOr(
-          region.min.y(), region.max.y(), r_.y(),
-          [&](int y) -> int { return y < a.min.y() || y > a.max.y() ? 1 : ox.v[ox.index(x, y, z)]; },
-          [&](int y, bool v) { oy.v[oy.index(x, y, z)] = v ? 1 : 0; });
+  if (disc_half_width_.empty()) {
+    // A box: separable, pass x over the region widened in y (and z), then pass y.
+    KeyBox a = b;
+    a.min.y() -= r_.y();
+    a.max.y() += r_.y();
+    a = intersect(a, grid_);
+    Volume ox(a);
+    for (int z = a.min.z(); z <= a.max.z(); ++z)
+      for (int y = a.min.y(); y <= a.max.y(); ++y) {
+        const std::size_t row = indexOf(VoxelKey(grid_.min.x(), y, z));
+        windowOr(
+            region.min.x(), region.max.x(), r_.x(),
+            [&](int x) -> int {
+              return x < grid_.min.x() || x > grid_.max.x()
+                         ? 1
+                         : (status_[row + static_cast<std::size_t>(x - grid_.min.x())] != kFree ? 1 : 0);
+            },
+            [&](int x, bool v) { ox.v[ox.index(x, y, z)] = v ? 1 : 0; });
+      }
+    for (int z = b.min.z(); z <= b.max.z(); ++z)
+      for (int x = region.min.x(); x <= region.max.x(); ++x) {
+        windowOr(
+            region.min.y(), region.max.y(), r_.y(),
+            [&](int y) -> int { return y < a.min.y() || y > a.max.y() ? 1 : ox.v[ox.index(x, y, z)]; },
+            [&](int y, bool v) { oy.v[oy.index(x, y, z)] = v ? 1 : 0; });
+      }
+  } else {
+    // A cylinder: per layer, row prefix counts of blocked voxels, then for each voxel one window per
+    // row of the disc.
+    const int r = r_.y();
+    const int x0 = region.min.x() - r, nx = region.max.x() + r - x0 + 1;
+    const int y0 = region.min.y() - r, ny = region.max.y() + r - y0 + 1;
+    std::vector<int> prefix(static_cast<std::size_t>(nx + 1) * static_cast<std::size_t>(ny));
+    auto rowOf = [&](int y) {
+      return prefix.data() + static_cast<std::size_t>(y - y0) * static_cast<std::size_t>(nx + 1);
+    };
+    for (int z = b.min.z(); z <= b.max.z(); ++z) {
+      for (int y = y0; y < y0 + ny; ++y) {
+        int* row = rowOf(y);
+        row[0] = 0;
+        for (int i = 0; i < nx; ++i) row[i + 1] = row[i] + blockedAt(x0 + i, y, z);
+      }
+      for (int y = region.min.y(); y <= region.max.y(); ++y)
+        for (int x = region.min.x(); x <= region.max.x(); ++x) {
+          bool hit = false;
+          for (int dy = -r; dy <= r && !hit; ++dy) {
+            const int w = disc_half_width_[static_cast<std::size_t>(std::abs(dy))];
+            const int* row = rowOf(y + dy);
+            hit = row[x + w - x0 + 1] - row[x - w - x0] > 0;
+          }
+          oy.v[oy.index(x, y, z)] = hit ? 1 : 0;
+        }
     }
+  }
   for (int y = region.min.y(); y <= region.max.y(); ++y)
     for (int x = region.min.x(); x <= region.max.x(); ++x) {
       windowOr(

@@ -387,7 +387,7 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   c.assume_free_radius_m = 0.0;
   const Eigen::AlignedBox3d box(c.box_min_world_m, c.box_max_world_m);
   // A start where the collision box is in known free space, inside the first lap.
-  const auto grid0 = TraversabilityGrid::build(*newest(), box, c.collision_box_m).value();
+  const auto grid0 = TraversabilityGrid::build(*newest(), box, Footprint::box(c.collision_box_m)).value();
   Waypoint start;
   bool found = false;
   for (int k = 0; k < 360 && !found; ++k)
@@ -435,7 +435,7 @@ TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   const auto final_snap = newest();
   ASSERT_TRUE(planner->plan(final_snap, current).ok());
   const auto scratch =
-      TraversabilityGrid::build(*final_snap, box, anyHeadingBox(c.collision_box_m, c.clearance_m)).value();
+      TraversabilityGrid::build(*final_snap, box, anyHeadingFootprint(c.collision_box_m, c.clearance_m)).value();
   EXPECT_TRUE(planner->traversability()->sameFlags(scratch));
 }
 
@@ -445,7 +445,7 @@ void expectPathValid(const map::MergedMap& map, const PlannerConfig& c, const Wa
                      const std::vector<Waypoint>& waypoints) {
   Waypoint prev = from;
   for (const Waypoint& w : waypoints) {
-    EXPECT_TRUE(bruteForceEdgeFree(map, prev.p_world, w.p_world, anyHeadingBox(c.collision_box_m)))
+    EXPECT_TRUE(bruteForceEdgeFree(map, prev.p_world, w.p_world, anyHeadingFootprint(c.collision_box_m)))
         << prev.p_world.transpose() << " -> " << w.p_world.transpose();
     EXPECT_LE(std::abs(geometry::wrapAngle(w.yaw_rad - prev.yaw_rad)), c.max_heading_change_rad + 1e-9);
     prev = w;
@@ -687,16 +687,18 @@ TEST(TraversabilityGrid, ClearanceNarrowsDoorsButNotTheVerticalMargin) {
   const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 0.0, -3.0), Eigen::Vector3d(0.3, 1.8, -0.5));
   auto map = test_fixtures::roomsWithADoor(map::GridConfig{}, west, east, door);
   const Eigen::Vector3d box(1.0, 1.0, 0.5);
-  EXPECT_TRUE(anyHeadingBox(box, 0.2).isApprox(Eigen::Vector3d(std::sqrt(2.0) + 0.4, std::sqrt(2.0) + 0.4, 0.5)));
-  const auto tight = TraversabilityGrid::build(*map, kRoom, anyHeadingBox(box)).value();
-  const auto clear = TraversabilityGrid::build(*map, kRoom, anyHeadingBox(box, 0.2)).value();
+  EXPECT_TRUE(anyHeadingFootprint(box, 0.2).vertical_cylinder);
+  EXPECT_TRUE(
+      anyHeadingFootprint(box, 0.2).size_m.isApprox(Eigen::Vector3d(std::sqrt(2.0) + 0.4, std::sqrt(2.0) + 0.4, 0.5)));
+  const auto tight = TraversabilityGrid::build(*map, kRoom, anyHeadingFootprint(box)).value();
+  const auto clear = TraversabilityGrid::build(*map, kRoom, anyHeadingFootprint(box, 0.2)).value();
   EXPECT_EQ(clear.inflationVoxels().z(), tight.inflationVoxels().z());
   EXPECT_EQ(clear.inflationVoxels().x(), tight.inflationVoxels().x() + 2);
   const Eigen::Vector3d from(-3.0, 0.9, -1.75), to(3.0, 0.9, -1.75);
   const auto through = tight.findPath(from, to);
   ASSERT_TRUE(through.ok()) << through.error().message;
   for (std::size_t i = 1; i < through->size(); ++i)
-    EXPECT_TRUE(bruteForceEdgeFree(*map, (*through)[i - 1], (*through)[i], anyHeadingBox(box)));
+    EXPECT_TRUE(bruteForceEdgeFree(*map, (*through)[i - 1], (*through)[i], anyHeadingFootprint(box)));
   EXPECT_TRUE(clear.isSafe(from));
   EXPECT_TRUE(clear.isSafe(to));
   EXPECT_FALSE(clear.findPath(from, to).ok());
@@ -710,7 +712,7 @@ TEST(TraversabilityGrid, AContactStaysBlockedThroughUpdatesUntilARebuild) {
   const Eigen::AlignedBox3d west(kRoom.min(), Eigen::Vector3d(0.0, kRoom.max().y(), kRoom.max().z()));
   auto merged = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, west, all)});
   const Eigen::Vector3d box(1.0, 1.0, 0.5);
-  auto grid = TraversabilityGrid::build(*merged->snapshot(), kRoom, anyHeadingBox(box)).value();
+  auto grid = TraversabilityGrid::build(*merged->snapshot(), kRoom, anyHeadingFootprint(box)).value();
   const Eigen::Vector3d contact(-2.5, 0.0, -1.75), near(-2.0, 0.0, -1.75), far(-4.0, 0.0, -1.75);
   ASSERT_TRUE(grid.isSafe(contact));
   ASSERT_TRUE(grid.edgeIsFree(far, near));
@@ -728,7 +730,7 @@ TEST(TraversabilityGrid, AContactStaysBlockedThroughUpdatesUntilARebuild) {
   ASSERT_TRUE(grid.update(*newer).ok());
   EXPECT_FALSE(grid.isSafe(contact));
   EXPECT_FALSE(grid.edgeIsFree(far, near));
-  const auto rebuilt = TraversabilityGrid::build(*newer, kRoom, anyHeadingBox(box)).value();
+  const auto rebuilt = TraversabilityGrid::build(*newer, kRoom, anyHeadingFootprint(box)).value();
   EXPECT_TRUE(rebuilt.isSafe(contact));
   EXPECT_TRUE(rebuilt.edgeIsFree(far, near));
 }
@@ -741,7 +743,7 @@ TEST(TraversabilityGrid, ReachableIsTheConnectedSafeRegionInBreadthFirstOrder) {
   const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
   auto map = test_fixtures::mergedOf(
       config, {test_fixtures::carvedGrid(config, west, all), test_fixtures::carvedGrid(config, east, all)});
-  const auto grid = TraversabilityGrid::build(*map, kRoom, anyHeadingBox({1.0, 1.0, 0.5})).value();
+  const auto grid = TraversabilityGrid::build(*map, kRoom, anyHeadingFootprint({1.0, 1.0, 0.5})).value();
   const Eigen::Vector3d from(-3.0, 0.0, -1.75);
   const auto order = grid.reachable(from, grid.statusArray().size());
   ASSERT_FALSE(order.empty());

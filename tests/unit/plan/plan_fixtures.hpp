@@ -3,6 +3,7 @@
 // maps of the synthetic pier built from real scans.
 
 #include "vog/map/merged_map.hpp"
+#include "vog/plan/traversability.hpp"
 
 #include "synthetic_scene.hpp"
 
@@ -130,6 +131,33 @@ inline bool bruteForceEdgeFree(const map::MergedMap& map, const Eigen::Vector3d&
       for (k.y() = lo.y(); k.y() <= hi.y(); ++k.y())
         for (k.x() = lo.x(); k.x() <= hi.x(); ++k.x())
           if (map.at(k).status != map::Occupancy::kFree) return false;
+  }
+  return true;
+}
+
+// The same for a footprint: a box as above; a vertical cylinder overlaps every voxel whose cell comes
+// within its radius horizontally (and within half its height vertically).
+inline bool bruteForceEdgeFree(const map::MergedMap& map, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Footprint& footprint) {
+  if (!footprint.vertical_cylinder) return bruteForceEdgeFree(map, a, b, footprint.size_m);
+  const double res = map.resolution();
+  const double radius = 0.5 * footprint.size_m.x();
+  const Eigen::Vector3d h(radius, radius, 0.5 * footprint.size_m.z());
+  const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * res))));
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(i) / n);
+    const VoxelKey lo = map::pointToKey(p - h, 1.0 / res);
+    const VoxelKey hi = map::pointToKey(p + h, 1.0 / res);
+    VoxelKey k;
+    for (k.z() = lo.z(); k.z() <= hi.z(); ++k.z())
+      for (k.y() = lo.y(); k.y() <= hi.y(); ++k.y())
+        for (k.x() = lo.x(); k.x() <= hi.x(); ++k.x()) {
+          const Eigen::Vector3d c = map::keyToCentre(k, res);
+          const double dx = std::max(std::abs(p.x() - c.x()) - 0.5 * res, 0.0);
+          const double dy = std::max(std::abs(p.y() - c.y()) - 0.5 * res, 0.0);
+          if (dx * dx + dy * dy >= radius * radius) continue;
+          if (map.at(k).status != map::Occupancy::kFree) return false;
+        }
   }
   return true;
 }

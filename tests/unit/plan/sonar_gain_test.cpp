@@ -72,7 +72,7 @@ TEST(SonarGain, MatchesReferencesOnASonarMap) {
   auto gain = SonarGain::create(config, grid_config.resolution_m).value();
   const auto cache =
       TraversabilityGrid::build(*map, Eigen::AlignedBox3d(config.box_min_world_m, config.box_max_world_m),
-                                config.collision_box_m)
+                                Footprint::box(config.collision_box_m))
           .value();
   // Segments from the orbit looking inward (pilings, occupied) and sweeping the heading.
   const std::vector<std::pair<Waypoint, Waypoint>> segments = {

@@ -37,7 +37,7 @@ std::vector<map::SubmapEntry>* PierTraversability::entries_ = nullptr;
 
 TEST_F(PierTraversability, EdgeCheckIsConservativeAgainstBruteForce) {
   const auto map = merged(0, entries_->size());
-  const auto grid = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*map, kPierBox, Footprint::box(kCollisionBox)).value();
   ASSERT_GT(grid.safeCount(), 1000u);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -71,7 +71,7 @@ TEST_F(PierTraversability, EdgeCheckIsConservativeAgainstBruteForce) {
 
 TEST_F(PierTraversability, SafeFlagMatchesBruteForceBoxAtVoxelCentresNearTheBoundary) {
   const auto map = merged(0, entries_->size());
-  const auto grid = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*map, kPierBox, Footprint::box(kCollisionBox)).value();
   const Eigen::Vector3i r = grid.inflationVoxels();
   EXPECT_EQ(r, Eigen::Vector3i(6, 6, 3));  // floor(h / 0.095) + 1
   // Safe voxel v <=> every voxel within r of v is known free (the definition, checked literally).
@@ -99,7 +99,7 @@ TEST_F(PierTraversability, IncrementalUpdateEqualsRebuild) {
   // Grow the map as the merge thread does, with a removal (a submap leaving) in between.
   auto writer = map::MergedMap::create(map::GridConfig{}).value();
   for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(writer->add((*entries_)[i]).ok());
-  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, kCollisionBox).value();
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, Footprint::box(kCollisionBox)).value();
   const std::size_t safe_before = grid.safeCount();
   for (std::size_t i = 3; i < entries_->size(); ++i) {
     ASSERT_TRUE(writer->add((*entries_)[i]).ok());
@@ -111,7 +111,7 @@ TEST_F(PierTraversability, IncrementalUpdateEqualsRebuild) {
     const auto stats = grid.update(*snap).value();
     EXPECT_FALSE(stats.rebuilt);
     EXPECT_GT(stats.blocks_read, 0);
-    const auto scratch = TraversabilityGrid::build(*snap, kPierBox, kCollisionBox).value();
+    const auto scratch = TraversabilityGrid::build(*snap, kPierBox, Footprint::box(kCollisionBox)).value();
     ASSERT_TRUE(grid.sameFlags(scratch)) << "after submap " << i;
     EXPECT_EQ(grid.mapVersion(), snap->version());
   }
@@ -126,12 +126,82 @@ TEST_F(PierTraversability, IncrementalUpdateEqualsRebuild) {
   EXPECT_EQ(grid.safeCount(), 0u);
 }
 
+// The any-heading footprint: a vertical cylinder (1.41 m across and 0.5 m high, the 1 x 1 x 0.5 m box
+// turning on the spot, grown by 0.3 m of clearance).
+const Footprint kCylinder = Footprint::cylinder(std::sqrt(2.0) + 0.6, 0.5);
+
+TEST_F(PierTraversability, CylinderSafeFlagIsTheDiscDefinitionCheckedLiterally) {
+  const auto map = merged(0, entries_->size());
+  const auto grid = TraversabilityGrid::build(*map, kPierBox, kCylinder).value();
+  const Eigen::Vector3i r = grid.inflationVoxels();
+  const double rho = 0.5 * kCylinder.size_m.x() / map->resolution();
+  EXPECT_EQ(r, Eigen::Vector3i(11, 11, 3));  // floor(rho) + 1 = floor(10.6) + 1; floor(0.25 / 0.095) + 1
+  // Safe voxel v <=> every voxel whose cell comes within rho of v's cell (horizontally), within r_z
+  // layers, is known free.
+  std::mt19937_64 rng(9);
+  std::uniform_int_distribution<int> ux(grid.gridKeys().min.x(), grid.gridKeys().max.x());
+  std::uniform_int_distribution<int> uy(grid.gridKeys().min.y(), grid.gridKeys().max.y());
+  std::uniform_int_distribution<int> uz(grid.gridKeys().min.z(), grid.gridKeys().max.z());
+  int safe = 0, unsafe_by_a_corner_only = 0;
+  for (int i = 0; i < 40000 && safe < 200; ++i) {
+    const map::VoxelKey v(ux(rng), uy(rng), uz(rng));
+    bool expect = true, square = true;
+    for (int dz = -r.z(); dz <= r.z(); ++dz)
+      for (int dy = -r.y(); dy <= r.y(); ++dy)
+        for (int dx = -r.x(); dx <= r.x(); ++dx) {
+          const map::VoxelKey k = v + map::VoxelKey(dx, dy, dz);
+          const bool free = grid.gridKeys().contains(k) && map->at(k).status == map::Occupancy::kFree;
+          const double mx = std::max(std::abs(dx) - 1, 0), my = std::max(std::abs(dy) - 1, 0);
+          if (!free && mx * mx + my * my <= rho * rho) expect = false;
+          if (!free) square = false;
+        }
+    ASSERT_EQ(grid.isSafeKey(v), expect) << v.transpose();
+    safe += expect;
+    unsafe_by_a_corner_only += expect && !square;
+  }
+  EXPECT_GT(safe, 20);
+  EXPECT_GT(unsafe_by_a_corner_only, 0) << "the disc admits voxels the square around it refuses";
+}
+
+TEST_F(PierTraversability, CylinderEdgeCheckIsConservativeAndIncrementalUpdateEqualsRebuild) {
+  auto writer = map::MergedMap::create(map::GridConfig{}).value();
+  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(writer->add((*entries_)[i]).ok());
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, kCylinder).value();
+  for (std::size_t i = 3; i < entries_->size(); ++i) {
+    ASSERT_TRUE(writer->add((*entries_)[i]).ok());
+    if (i == 5) {
+      ASSERT_TRUE(writer->remove((*entries_)[1].id).ok());
+    }
+    const auto snap = writer->snapshot();
+    ASSERT_TRUE(grid.update(*snap).ok());
+    ASSERT_TRUE(grid.sameFlags(TraversabilityGrid::build(*snap, kPierBox, kCylinder).value())) << "after submap " << i;
+  }
+  const auto map = writer->snapshot();
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), radius(2.0, 7.0), angle(0.0, 6.283), depth(-3.0, -1.0);
+  int grid_free = 0;
+  for (int i = 0; i < 300; ++i) {
+    Eigen::Vector3d a;
+    for (int tries = 0; tries < 2000; ++tries) {
+      const double t = angle(rng), r = radius(rng);
+      a = Eigen::Vector3d(r * std::cos(t), r * std::sin(t), depth(rng));
+      if (i % 2 == 1 || grid.isSafe(a)) break;
+    }
+    const Eigen::Vector3d b = a + 2.0 * std::abs(u(rng)) * Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng)).normalized();
+    const bool fast = grid.edgeIsFree(a, b);
+    ASSERT_FALSE(fast && !bruteForceEdgeFree(*map, a, b, kCylinder))
+        << "edge " << a.transpose() << " -> " << b.transpose();
+    grid_free += fast;
+  }
+  EXPECT_GE(grid_free, 20);  // the test exercises free edges, not only blocked ones
+}
+
 TEST_F(PierTraversability, OlderSnapshotIsAnError) {
   auto writer = map::MergedMap::create(map::GridConfig{}).value();
   ASSERT_TRUE(writer->add((*entries_)[0]).ok());
   const auto old_snap = writer->snapshot();
   ASSERT_TRUE(writer->add((*entries_)[1]).ok());
-  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, kCollisionBox).value();
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, Footprint::box(kCollisionBox)).value();
   const auto r = grid.update(*old_snap);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("older"), std::string::npos);
@@ -143,7 +213,7 @@ TEST(Traversability, CarvedRoomMarginsAndPathHome) {
   auto all = [](const map::VoxelKey&) { return true; };
   const auto grid_room = test_fixtures::carvedGrid(config, room, all);
   auto map = test_fixtures::mergedOf(config, {grid_room});
-  const auto grid = TraversabilityGrid::build(*map, room, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*map, room, Footprint::box(kCollisionBox)).value();
   // Exactly known room: a box centre is safe iff it keeps r voxels from the walls.
   const map::KeyBox free_keys = test_fixtures::centreKeys(room, config.resolution_m);
   const Eigen::Vector3i r = grid.inflationVoxels();
@@ -183,7 +253,7 @@ TEST(Traversability, PathAroundAWallThroughADoor) {
   const Eigen::AlignedBox3d door(Eigen::Vector3d(-0.3, 1.0, -2.0), Eigen::Vector3d(0.3, 2.5, -0.8));
   auto map = test_fixtures::roomsWithADoor(map::GridConfig{}, west, east, door);
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(4.0, 3.0, -0.8));
-  const auto grid = TraversabilityGrid::build(*map, box, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*map, box, Footprint::box(kCollisionBox)).value();
   const Eigen::Vector3d from(-3.0, -2.0, -1.4);
   const Eigen::Vector3d to(3.0, -2.0, -1.4);
   EXPECT_FALSE(grid.edgeIsFree(from, to));
@@ -208,7 +278,7 @@ TEST(Traversability, ASnapshotOfAnotherMapIsAnErrorEvenAtTheSameVersion) {
   auto b = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, large, all)});
   ASSERT_EQ(a->version(), b->version());
   ASSERT_NE(a->writerId(), b->writerId());
-  auto grid = TraversabilityGrid::build(*a->snapshot(), large, kCollisionBox).value();
+  auto grid = TraversabilityGrid::build(*a->snapshot(), large, Footprint::box(kCollisionBox)).value();
   const auto u = grid.update(*b->snapshot());
   ASSERT_FALSE(u.ok());
   EXPECT_NE(u.error().message.find("another map"), std::string::npos);
@@ -221,15 +291,15 @@ TEST(Traversability, BadBoxesAreErrors) {
   const map::GridConfig config;
   auto map = map::MergedMap::create(config).value();
   const Eigen::AlignedBox3d flat(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 0));
-  EXPECT_FALSE(TraversabilityGrid::build(*map, flat, kCollisionBox).ok());
+  EXPECT_FALSE(TraversabilityGrid::build(*map, flat, Footprint::box(kCollisionBox)).ok());
   const Eigen::AlignedBox3d box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1));
-  EXPECT_FALSE(TraversabilityGrid::build(*map, box, Eigen::Vector3d(1, 0, 1)).ok());
+  EXPECT_FALSE(TraversabilityGrid::build(*map, box, Footprint::box(Eigen::Vector3d(1, 0, 1))).ok());
   const Eigen::AlignedBox3d huge(Eigen::Vector3d(-1e4, -1e4, -1e4), Eigen::Vector3d(1e4, 1e4, 1e4));
-  const auto r = TraversabilityGrid::build(*map, huge, kCollisionBox);
+  const auto r = TraversabilityGrid::build(*map, huge, Footprint::box(kCollisionBox));
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("voxels"), std::string::npos);
   // An empty map: nothing is safe, no edge is free, NaN is never free.
-  const auto g = TraversabilityGrid::build(*map, box, kCollisionBox).value();
+  const auto g = TraversabilityGrid::build(*map, box, Footprint::box(kCollisionBox)).value();
   EXPECT_EQ(g.safeCount(), 0u);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(g.edgeIsFree(Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d(nan, 0.5, 0.5)));
@@ -241,8 +311,8 @@ TEST_F(PierTraversability, AssumedFreeSphereFreesUnknownOnly) {
   const auto map = merged(0, entries_->size());
   const Eigen::Vector3d centre(0.0, -6.0, -2.0);  // open water beside the pier
   const AssumedFree sphere{centre, 1.5};
-  const auto plain = TraversabilityGrid::build(*map, kPierBox, kCollisionBox).value();
-  const auto with = TraversabilityGrid::build(*map, kPierBox, kCollisionBox, sphere).value();
+  const auto plain = TraversabilityGrid::build(*map, kPierBox, Footprint::box(kCollisionBox)).value();
+  const auto with = TraversabilityGrid::build(*map, kPierBox, Footprint::box(kCollisionBox), sphere).value();
   ASSERT_TRUE(with.isSafe(centre));
   std::size_t freed = 0;
   for (double x = -3.0; x <= 3.0; x += 0.05)
@@ -260,7 +330,7 @@ TEST_F(PierTraversability, AssumedFreeSphereFreesUnknownOnly) {
       }
     }
   EXPECT_GT(freed, 0u);
-  EXPECT_FALSE(TraversabilityGrid::build(*map, kPierBox, kCollisionBox, {centre, -1.0}).ok());
+  EXPECT_FALSE(TraversabilityGrid::build(*map, kPierBox, Footprint::box(kCollisionBox), {centre, -1.0}).ok());
 }
 
 TEST(Traversability, RecoveryGoesAroundAWallNotThroughIt) {
@@ -273,7 +343,7 @@ TEST(Traversability, RecoveryGoesAroundAWallNotThroughIt) {
   auto all = [](const map::VoxelKey&) { return true; };
   auto map = test_fixtures::mergedOf(
       config, {test_fixtures::carvedGrid(config, room, all), test_fixtures::carvedGrid(config, slab, all)});
-  const auto grid = TraversabilityGrid::build(*map, room, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*map, room, Footprint::box(kCollisionBox)).value();
   const Eigen::Vector3d p(0.0, -0.7, -1.5);
   ASSERT_FALSE(grid.isSafe(p));
   ASSERT_FALSE(test_fixtures::sweepTouchesNewOccupied(*map, p, p, kCollisionBox));
@@ -303,7 +373,7 @@ TEST(Traversability, RecoverySeesWallsOutsideTheGrid) {
   auto all = [](const map::VoxelKey&) { return true; };
   auto walled = test_fixtures::mergedOf(
       config, {test_fixtures::carvedGrid(config, room, all), test_fixtures::carvedGrid(config, slab, all)});
-  const auto grid = TraversabilityGrid::build(*walled, box, kCollisionBox).value();
+  const auto grid = TraversabilityGrid::build(*walled, box, Footprint::box(kCollisionBox)).value();
   const map::VoxelKey wall_key = map::pointToKey(Eigen::Vector3d(0.0, -1.95, -1.5), 1.0 / config.resolution_m);
   ASSERT_EQ(walled->at(wall_key).status, map::Occupancy::kOccupied);
   ASSERT_EQ(grid.status(wall_key), map::Occupancy::kUnknown);  // outside the grid
@@ -311,7 +381,7 @@ TEST(Traversability, RecoverySeesWallsOutsideTheGrid) {
   EXPECT_FALSE(grid.nearestSafeClearOfOccupied(*walled, p, 0.0, kCollisionBox, 3.0).has_value());
 
   auto open = test_fixtures::mergedOf(config, {test_fixtures::carvedGrid(config, room, all)});
-  const auto open_grid = TraversabilityGrid::build(*open, box, kCollisionBox).value();
+  const auto open_grid = TraversabilityGrid::build(*open, box, Footprint::box(kCollisionBox)).value();
   const auto escape = open_grid.nearestSafeClearOfOccupied(*open, p, 0.0, kCollisionBox, 3.0);
   ASSERT_TRUE(escape.has_value());
   EXPECT_TRUE(open_grid.isSafe(*escape));

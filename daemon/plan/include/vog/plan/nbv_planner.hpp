@@ -77,9 +77,9 @@ struct PlanResult {
 };
 
 // The vehicle turns while it moves, so its collision box may face any heading: collisions are checked
-// for the axis-aligned box that holds it at every yaw (x and y sides = the diagonal of its footprint),
-// grown by clearance_m on its four vertical sides.
-Eigen::Vector3d anyHeadingBox(const Eigen::Vector3d& collision_box_m, double clearance_m = 0.0);
+// for the vertical cylinder the box sweeps turning on the spot (diameter = the diagonal of its
+// horizontal sides, height = its height), grown by clearance_m all around its vertical side.
+Footprint anyHeadingFootprint(const Eigen::Vector3d& collision_box_m, double clearance_m = 0.0);
 
 class NbvPlanner {
  public:

@@ -1,12 +1,16 @@
 #pragma once
-// Traversability of the exploration box for a box-shaped vehicle, from a MergedMap snapshot.
+// Traversability of the exploration box for a vehicle's footprint (an axis-aligned box, or the
+// vertical cylinder a box sweeps turning on the spot), from a MergedMap snapshot.
 //
-// A voxel is "safe" when a collision box centred anywhere inside it lies entirely in known free space
+// A voxel is "safe" when the footprint centred anywhere inside it lies entirely in known free space
 // (unknown is not traversable, thesis 4.3.2). Computed by inflating every voxel that is not known
-// free by the box half-extents plus one voxel (r_i = floor(h_i / res) + 1 voxels per axis), with a
-// separable max filter: a box centred at p in voxel v overlaps only voxels within r_i of v, so "no
-// blocked voxel within r of v" is conservative (a colliding edge is never called free) and at most one
-// voxel per side stricter than the exact test.
+// free. A box: by its half-extents plus one voxel (r_i = floor(h_i / res) + 1 voxels per axis), with a
+// separable max filter: a box centred at p in voxel v overlaps only voxels within r_i of v. A
+// cylinder of radius rho voxels: voxel u can be reached from v when the two voxels' cells come within
+// rho of each other, i.e. max(|dx| - 1, 0)^2 + max(|dy| - 1, 0)^2 <= rho^2 (a disc per row: for
+// each dy a window of half-width floor(sqrt(rho^2 - max(|dy| - 1, 0)^2)) + 1 in x), then its height
+// as the box's. Either is conservative (a colliding edge is never called free) and at most one voxel
+// per side stricter than the exact test.
 //
 // The grid covers the exploration box's voxels plus r on every side; outside it everything counts as
 // blocked. An edge is free when both ends lie in the exploration box and every voxel its centre line
@@ -36,6 +40,18 @@
 
 namespace vog::plan {
 
+// The space the vehicle needs around its centre in the collision checks: an axis-aligned box of full
+// sides size_m, or (vertical_cylinder) a vertical cylinder of diameter size_m.x() (= size_m.y()) and
+// height size_m.z().
+struct Footprint {
+  Eigen::Vector3d size_m = Eigen::Vector3d::Ones();
+  bool vertical_cylinder = false;
+  static Footprint box(const Eigen::Vector3d& sides_m) { return {sides_m, false}; }
+  static Footprint cylinder(double diameter_m, double height_m) {
+    return {Eigen::Vector3d(diameter_m, diameter_m, height_m), true};
+  }
+};
+
 // Unknown voxels whose centre lies within radius_m of centre_world count as free (never occupied
 // ones). radius 0: none.
 struct AssumedFree {
@@ -51,9 +67,10 @@ struct TraversabilityUpdate {
 
 class TraversabilityGrid {
  public:
-  // box: the exploration box (world frame); collision_box_m: full side lengths of the vehicle's box.
+  // box: the exploration box (world frame). Errors on an empty box, a footprint not > 0 on every axis
+  // (a cylinder's x and y must agree), a grid too large.
   static Result<TraversabilityGrid> build(const map::MergedMap& map, const Eigen::AlignedBox3d& box_world,
-                                          const Eigen::Vector3d& collision_box_m, const AssumedFree& assumed_free = {});
+                                          const Footprint& footprint, const AssumedFree& assumed_free = {});
 
   // Catches up with `newer`, a later snapshot of the map this grid was built from. A snapshot of
   // another MergedMap (writerId), with an older version than the grid's, or of another resolution
@@ -64,7 +81,7 @@ class TraversabilityGrid {
   // outside the grid or non-finite: ignored.
   void addContact(const Eigen::Vector3d& p_world);
 
-  // Is a collision box centred at p (world) inside the exploration box and in known free space?
+  // Is the footprint centred at p (world) inside the exploration box and in known free space?
   bool isSafe(const Eigen::Vector3d& p_world) const;
   bool isSafeKey(const map::VoxelKey& key) const;
   // The centre of the safe voxel nearest to p within radius_m (ties: lowest z, y, x), or nullopt.
@@ -138,6 +155,7 @@ class TraversabilityGrid {
   map::KeyBox grid_;  // inclusive keys covered by status_ and safe_
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
   Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
+  std::vector<int> disc_half_width_;             // a cylinder: x half-width per |dy| in [0, r_.y()]; empty: a box
   std::vector<std::uint8_t> status_;             // map::Occupancy per voxel
   std::vector<std::uint8_t> safe_;               // 1 = a box centred in this voxel is in known free space
   std::vector<map::VoxelKey> contacts_;          // addContact(), inside grid_
