@@ -183,7 +183,8 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
         ++n_explore;
         current = r->waypoints.front();
         break;
-      case plan::PlanStatus::kComplete: ++n_complete; break;
+      case plan::PlanStatus::kComplete:
+      case plan::PlanStatus::kNearHome: ++n_complete; break;
       case plan::PlanStatus::kNoPath: ++n_nopath; break;
     }
   }

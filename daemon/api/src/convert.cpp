@@ -23,6 +23,7 @@ const char* toString(MissionState s) {
     case MissionState::kComplete: return "complete";
     case MissionState::kPaused: return "paused";
     case MissionState::kAborted: return "aborted";
+    case MissionState::kNearHome: return "near_home";
   }
   return "?";
 }
@@ -113,6 +114,7 @@ v1::MissionState toProto(MissionState s) {
     case MissionState::kComplete: return v1::MISSION_STATE_COMPLETE;
     case MissionState::kPaused: return v1::MISSION_STATE_PAUSED;
     case MissionState::kAborted: return v1::MISSION_STATE_ABORTED;
+    case MissionState::kNearHome: return v1::MISSION_STATE_NEAR_HOME;
   }
   return v1::MISSION_STATE_UNSPECIFIED;
 }
@@ -125,6 +127,7 @@ Result<MissionState> fromProto(v1::MissionState s) {
     case v1::MISSION_STATE_COMPLETE: return MissionState::kComplete;
     case v1::MISSION_STATE_PAUSED: return MissionState::kPaused;
     case v1::MISSION_STATE_ABORTED: return MissionState::kAborted;
+    case v1::MISSION_STATE_NEAR_HOME: return MissionState::kNearHome;
     default: return Error{unknownEnum("mission_state", s)};
   }
 }

@@ -33,6 +33,7 @@ api::MissionState toApi(mission::MissionState s) {
     case mission::MissionState::kComplete: return api::MissionState::kComplete;
     case mission::MissionState::kPaused: return api::MissionState::kPaused;
     case mission::MissionState::kAborted: return api::MissionState::kAborted;
+    case mission::MissionState::kNearHome: return api::MissionState::kNearHome;
   }
   return api::MissionState::kIdle;
 }
@@ -298,7 +299,8 @@ void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& re
   if (after == before) return;  // raced with a command (MissionControl ignores it): nothing to journal
   if (event == mission::MissionEvent::kExplorationDone)
     spdlog::info("planner: exploration ends ({}); returning home", reason);
-  if (event == mission::MissionEvent::kNoPath) spdlog::warn("planner: {}", reason);
+  if (event == mission::MissionEvent::kNoPath || event == mission::MissionEvent::kArrivedNearHome)
+    spdlog::warn("planner: {}", reason);
   recordStateLocked(after);
 }
 
@@ -330,8 +332,10 @@ void Daemon::planningLoop() {
       planner_cv_.wait_for(lock, std::chrono::milliseconds(50));
       if (stopping_) break;
       if (!mission_.active()) {
-        planner_state_ = mission_.state() == mission::MissionState::kComplete ? api::PlannerState::kFinished
-                                                                              : api::PlannerState::kIdle;
+        planner_state_ =
+            mission_.state() == mission::MissionState::kComplete || mission_.state() == mission::MissionState::kNearHome
+                ? api::PlannerState::kFinished
+                : api::PlannerState::kIdle;
         continue;
       }
       // A mission starts once navigation is up: its home and first waypoints are the vehicle's pose.

@@ -15,6 +15,7 @@ const char* toString(Ending ending) {
     case Ending::kNone: return "none";
     case Ending::kComplete: return "complete";
     case Ending::kBudget: return "budget";
+    case Ending::kNearHome: return "near_home";
     case Ending::kNoPath: return "no_path";
     case Ending::kStalled: return "stalled";
   }
@@ -52,6 +53,7 @@ Status ExplorationController::start(const geometry::Pose3& T_world_home, const m
   returning_ = false;
   home_path_sent_ = false;
   home_ending_ = Ending::kComplete;
+  short_of_home_ = false;
   ending_ = Ending::kNone;
   reason_.clear();
   idle_plans_ = 0;
@@ -77,6 +79,7 @@ std::optional<mission::MissionEvent> ExplorationController::endingEvent() const 
     case Ending::kNone: return std::nullopt;
     case Ending::kComplete:
     case Ending::kBudget: return mission::MissionEvent::kArrivedHome;
+    case Ending::kNearHome: return mission::MissionEvent::kArrivedNearHome;
     case Ending::kNoPath:
     case Ending::kStalled: return mission::MissionEvent::kNoPath;
   }
@@ -104,7 +107,7 @@ void ExplorationController::end(Ending ending, std::string reason, StepOutput& o
 }
 
 void ExplorationController::goHome(Ending why, const plan::PlanResult& path, StepOutput& out) {
-  if (path.status != plan::PlanStatus::kComplete) {
+  if (path.status != plan::PlanStatus::kComplete && path.status != plan::PlanStatus::kNearHome) {
     end(Ending::kNoPath, path.reason, out);
     return;
   }
@@ -115,6 +118,9 @@ void ExplorationController::goHome(Ending why, const plan::PlanResult& path, Ste
     out.event = mission::MissionEvent::kExplorationDone;
     out.reason = reason_;
   }
+  // Each new way home says again whether it reaches home (the map may have opened the way since).
+  short_of_home_ = path.status == plan::PlanStatus::kNearHome;
+  if (short_of_home_) reason_ = path.reason;
   out.waypoints = path.waypoints;
   home_path_sent_ = true;
 }
@@ -143,7 +149,7 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
     return out;
   }
   if (returning_ && home_path_sent_) {
-    end(home_ending_, reason_, out);
+    end(short_of_home_ ? Ending::kNearHome : home_ending_, reason_, out);
     return out;
   }
   auto snapshot = input.map ? input.map() : Result<std::shared_ptr<const map::MergedMap>>(nullptr);
@@ -155,8 +161,8 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
     if (!home) return home.error();
     if (budget_spent)
       home->reason = "submap budget of " + std::to_string(config_.max_submaps) + " reached" +
-                     (home->status == plan::PlanStatus::kComplete ? "" : "; no way home");
-    else if (home->status != plan::PlanStatus::kComplete)
+                     (home->status == plan::PlanStatus::kComplete ? "" : "; " + home->reason);
+    else if (home->status == plan::PlanStatus::kNoPath)
       home->reason = "no way home: " + home->reason;
     out.plan = *home;
     goHome(budget_spent ? Ending::kBudget : home_ending_, *home, out);
@@ -174,8 +180,7 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
   switch (result->status) {
     case plan::PlanStatus::kNoPath: end(Ending::kNoPath, result->reason, out); return out;
     case plan::PlanStatus::kComplete:  // nothing left to explore: the plan is the way home
-      goHome(Ending::kComplete, *result, out);
-      return out;
+    case plan::PlanStatus::kNearHome: goHome(Ending::kComplete, *result, out); return out;
     case plan::PlanStatus::kExplore: break;
   }
   if (result->waypoints.empty() || ++idle_plans_ > config_.max_idle_plans) {

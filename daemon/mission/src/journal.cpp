@@ -194,8 +194,8 @@ Result<JournalRecord> decodeMissionState(ByteReader& in) {
   r.stamp_ns = in.i64("stamp_ns");
   const std::uint8_t state = in.u8("state");
   if (Status s = finish(in, kType); !s.ok()) return s.error();
-  if (state > static_cast<std::uint8_t>(MissionState::kAborted)) {
-    return Error{std::string(kType) + " record: state " + std::to_string(state) + " is not 0..5"};
+  if (state > static_cast<std::uint8_t>(MissionState::kNearHome)) {
+    return Error{std::string(kType) + " record: state " + std::to_string(state) + " is not 0..6"};
   }
   r.state = static_cast<MissionState>(state);
   return JournalRecord{r};
@@ -211,6 +211,7 @@ const char* toString(MissionState state) {
     case MissionState::kComplete: return "complete";
     case MissionState::kPaused: return "paused";
     case MissionState::kAborted: return "aborted";
+    case MissionState::kNearHome: return "near_home";
   }
   return "unknown";
 }

@@ -18,6 +18,7 @@ const char* toString(MissionEvent event) {
   switch (event) {
     case MissionEvent::kExplorationDone: return "exploration done";
     case MissionEvent::kArrivedHome: return "arrived home";
+    case MissionEvent::kArrivedNearHome: return "arrived near home";
     case MissionEvent::kNoPath: return "no path";
   }
   return "?";
@@ -38,8 +39,7 @@ Result<MissionState> MissionControl::command(MissionCommandKind kind, const std:
       box_ = box;
       return state_;
     case MissionCommandKind::kStart:
-      if (state_ != MissionState::kIdle && state_ != MissionState::kComplete && state_ != MissionState::kAborted)
-        return refuse("");
+      if (state_ != MissionState::kIdle && !ended()) return refuse("");
       if (!box_) return refuse("no exploration box is set");
       state_ = MissionState::kExploring;
       reason_.clear();
@@ -54,7 +54,7 @@ Result<MissionState> MissionControl::command(MissionCommandKind kind, const std:
       state_ = paused_from_;
       return state_;
     case MissionCommandKind::kAbort:
-      if (state_ == MissionState::kComplete || state_ == MissionState::kAborted) return refuse("");
+      if (ended()) return refuse("");
       state_ = MissionState::kAborted;
       reason_ = "aborted by the operator";
       return state_;
@@ -73,6 +73,9 @@ MissionState MissionControl::event(MissionEvent e) {
       break;
     case MissionEvent::kArrivedHome:
       if (state_ == MissionState::kReturning) state_ = MissionState::kComplete;
+      break;
+    case MissionEvent::kArrivedNearHome:
+      if (state_ == MissionState::kReturning) state_ = MissionState::kNearHome;
       break;
     case MissionEvent::kNoPath:
       if (active()) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <iomanip>
 #include <sstream>
 #include <utility>
 
@@ -15,6 +16,12 @@ namespace {
 std::string describe(const Eigen::Vector3d& p) {
   std::ostringstream s;
   s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+std::string metres(double m) {
+  std::ostringstream s;
+  s << std::setprecision(3) << m << " m";
   return s.str();
 }
 
@@ -64,6 +71,7 @@ const char* toString(PlanStatus status) {
   switch (status) {
     case PlanStatus::kExplore: return "explore";
     case PlanStatus::kComplete: return "complete";
+    case PlanStatus::kNearHome: return "near_home";
     case PlanStatus::kNoPath: break;
   }
   return "no_path";
@@ -193,7 +201,7 @@ Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedM
     start.p_world = *snapped;
   }
   result = fromRoot(start, from, goHome(start, std::move(result)));
-  if (back && result.status == PlanStatus::kComplete) result.waypoints.insert(result.waypoints.begin(), from);
+  if (back && result.status != PlanStatus::kNoPath) result.waypoints.insert(result.waypoints.begin(), from);
   return result;
 }
 
@@ -475,15 +483,38 @@ PlanResult NbvPlanner::globalGoalOrHome(const map::MergedMap& map, const Waypoin
 
 PlanResult NbvPlanner::goHome(const Waypoint& current, PlanResult result) const {
   auto path = grid_->findPath(current.p_world, home_.p_world);
-  if (!path.ok()) {
+  if (path.ok()) {
+    result.status = PlanStatus::kComplete;
+    // Headings turn toward the home heading by at most the allowed change per waypoint (thesis 4.5.3).
+    result.waypoints = alongPath(path.value(), current.yaw_rad, home_.yaw_rad);
+    if (result.waypoints.empty()) result.waypoints.push_back(home_);
+    return result;
+  }
+  // Home is not reachable through known free space (not safe itself, or cut off): the reachable safe
+  // voxel nearest to it (the breadth-first order makes the fewest steps win a tie).
+  const double res = grid_->resolution();
+  std::optional<Eigen::Vector3d> nearest;
+  double nearest_m = 0.0;
+  for (const map::VoxelKey& k : grid_->reachable(current.p_world, grid_->statusArray().size())) {
+    const Eigen::Vector3d c = map::keyToCentre(k, res);
+    const double d = (c - home_.p_world).norm();
+    if (!nearest || d < nearest_m) {
+      nearest = c;
+      nearest_m = d;
+    }
+  }
+  auto near = nearest ? grid_->findPath(current.p_world, *nearest) : path;
+  if (!near.ok()) {
     result.status = PlanStatus::kNoPath;
     result.reason += "; exploration is complete but there is no way home: " + path.error().message;
     return result;
   }
-  result.status = PlanStatus::kComplete;
-  // Headings turn toward the home heading by at most the allowed change per waypoint (thesis 4.5.3).
-  result.waypoints = alongPath(path.value(), current.yaw_rad, home_.yaw_rad);
-  if (result.waypoints.empty()) result.waypoints.push_back(home_);
+  result.status = PlanStatus::kNearHome;
+  result.reason += "; home " + describe(home_.p_world) + " is not reachable through known free space (" +
+                   path.error().message + "): going to " + describe(*nearest) +
+                   ", the reachable safe position nearest to it (" + metres(nearest_m) + " away)";
+  result.waypoints = alongPath(near.value(), current.yaw_rad, home_.yaw_rad);
+  if (result.waypoints.empty()) result.waypoints.push_back({*nearest, home_.yaw_rad});
   return result;
 }
 

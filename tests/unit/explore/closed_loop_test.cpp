@@ -3,7 +3,9 @@
 // map follows them, and the controller steers on that map from the odometry estimate, as vogd and
 // `vog-bench mission` run it. A short mission on the tank ends on its submap budget at home, every
 // waypoint it sent lies in the exploration box, and a second run with the same seed is the same
-// mission bit for bit.
+// mission bit for bit. A whole tank survey with loop closures (the thesis's real-world experiment,
+// `vog-bench mission --scene config/scenes/tank.yaml --mode vog-lc --seed 1`) completes and comes
+// home.
 #include "vog/explore/exploration_controller.hpp"
 #include "vog/map/merged_map.hpp"
 #include "vog/sim/lockstep.hpp"
@@ -45,16 +47,26 @@ struct Mission {
   Pose3 T_true_end = Pose3::Identity();
 };
 
-Mission runMission(std::uint64_t seed, int budget) {
+// `loop_closures`: as vog-bench mission's vog-lc mode (its odometry noise, degeneracy-aware closures);
+// without, raw odometry at the thesis's rates.
+Mission runMission(std::uint64_t seed, int budget, bool loop_closures = false) {
   Mission m;
   auto scene = sim::loadScene(test::sourceDir() / "config/scenes/tank.yaml").value();
   auto world = sim::World::create(scene).value();
   sim::LockstepConfig sc;
   sc.seed = seed;
   sc.frame_every = 0;
+  if (loop_closures) {
+    sc.odometry.profile = sim::OdometryNoiseProfile::kRandomWalk;
+    sc.odometry.sigma2_x_m2ps *= 0.25;
+    sc.odometry.sigma2_y_m2ps *= 0.25;
+    sc.odometry.sigma2_yaw_rad2ps *= 0.25;
+    sc.odometry.world_frame_xy_noise = true;
+  }
   auto simulation = sim::LockstepSimulation::create(*world, sc).value();
   slam::MappingPipelineConfig mc;
-  mc.loop_closures = false;
+  mc.loop_closures = loop_closures;
+  mc.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
   auto pipeline = slam::MappingPipeline::create(mc).value();
   auto merged = map::MergedMap::create(mc.builder.grid).value();
   ExplorationConfig ec;
@@ -72,7 +84,8 @@ Mission runMission(std::uint64_t seed, int budget) {
     const slam::SubmapRecord& r = pipeline->submaps().back();
     return Pose3(r.T_world_base * r.T_world_base_odom.inverse() * scans.T_odom_now);
   };
-  for (int i = 0; i < 40000 && controller.active(); ++i) {  // at most 4000 s
+  constexpr std::int64_t kMaxStampNs = 3000'000'000'000;  // at most 3000 s of simulated time
+  while (controller.active() && simulation.stampNs() < kMaxStampNs) {
     simulation.step(scans);
     while (!scans.pending.empty()) {
       auto update = pipeline->feed(scans.pending.front());
@@ -132,6 +145,18 @@ TEST(ClosedLoop, AShortTankMissionEndsOnItsBudgetAtHomeTheSameWayEveryTime) {
     EXPECT_EQ(b.sent[i].p_world, a.sent[i].p_world) << i;
     EXPECT_EQ(b.sent[i].yaw_rad, a.sent[i].yaw_rad) << i;
   }
+}
+
+// Before the planner checked the turning vehicle as a cylinder, the square around it made the tank's
+// start (1.5 m from the wall, toward a diagonal) unsafe once the wall was mapped, and every such
+// survey ended "exploration is complete but there is no way home".
+TEST(ClosedLoop, AWholeTankSurveyWithLoopClosuresComesHome) {
+  auto scene = sim::loadScene(test::sourceDir() / "config/scenes/tank.yaml").value();
+  const Mission m = runMission(1, 156, true);
+  ASSERT_EQ(m.ending, Ending::kComplete) << m.summary << " after " << m.seconds << " s, " << m.n_submaps << " submaps";
+  EXPECT_GT(m.n_submaps, 20u);
+  EXPECT_EQ(m.sent.back().p_world, scene.T_world_start.translation());
+  EXPECT_LT((m.T_true_end.translation() - scene.T_world_start.translation()).norm(), 1.0);
 }
 
 }  // namespace

@@ -51,6 +51,20 @@ std::shared_ptr<const map::MergedMap> halfRoom() {
   return map;
 }
 
+// Two known rooms with no way between them.
+std::shared_ptr<const map::MergedMap> twoRooms() {
+  static const std::shared_ptr<const map::MergedMap> map = [] {
+    const map::GridConfig config;
+    auto all = [](const map::VoxelKey&) { return true; };
+    const Eigen::AlignedBox3d west(kRoom.min(), Eigen::Vector3d(-0.5, kRoom.max().y(), kRoom.max().z()));
+    const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, kRoom.min().y(), kRoom.min().z()), kRoom.max());
+    return plan::test_fixtures::mergedOf(config, {plan::test_fixtures::carvedGrid(config, west, all),
+                                                  plan::test_fixtures::carvedGrid(config, east, all)})
+        ->snapshot();
+  }();
+  return map;
+}
+
 // A simulated vehicle in the map frame: it reaches its last waypoint `travel_steps` steps after
 // it was sent; the mission's time advances 100 ms a step.
 struct SimVehicle {
@@ -198,6 +212,40 @@ TEST(ExplorationController, EventsThatRacedWithAPauseAreHeardWhenTheMissionMoves
   EXPECT_EQ(c.eventsFor(returning.state()), (std::vector<mission::MissionEvent>{mission::MissionEvent::kArrivedHome}));
 }
 
+// Nothing left to explore but home is cut off: the vehicle goes to the reachable safe position
+// nearest to home and the mission ends near_home, not complete.
+TEST(ExplorationController, HomeCutOffEndsAtTheReachablePositionNearestHomeAsNearHome) {
+  auto c = ExplorationController::create(roomConfig()).value();
+  SimVehicle v;
+  const Pose3 home = poseOf({-3.0, 0.0, -1.75}, 0.0);
+  ASSERT_TRUE(c.start(home, kBox, 0, false).ok());
+  v.T = poseOf({3.0, 0.0, -1.75}, 0.0);
+  const StepOutput out = c.step(v.input(twoRooms())).value();
+  ASSERT_TRUE(out.plan.has_value());
+  EXPECT_EQ(out.plan->status, plan::PlanStatus::kNearHome);
+  ASSERT_EQ(out.event, mission::MissionEvent::kExplorationDone);
+  ASSERT_TRUE(out.waypoints.has_value());
+  ASSERT_FALSE(out.waypoints->empty());
+  const Eigen::Vector3d near = out.waypoints->back().p_world;
+  EXPECT_GT(near.x(), 0.0);  // in the vehicle's room, on the side toward home
+  EXPECT_LT(near.x(), 2.0);
+  v.apply(out);
+  StepOutput arrived;
+  for (int i = 0; i < 10 && !arrived.event; ++i) {
+    v.advance();
+    arrived = c.step(v.input(twoRooms())).value();
+  }
+  EXPECT_EQ(arrived.event, mission::MissionEvent::kArrivedNearHome);
+  EXPECT_EQ(c.ending(), Ending::kNearHome);
+  EXPECT_EQ(c.summary().rfind("near_home: ", 0), 0u) << c.summary();
+  EXPECT_NE(c.summary().find("not reachable through known free space"), std::string::npos) << c.summary();
+  // The mission hears both, and ends in its own word.
+  mission::MissionControl m(kBox, mission::MissionState::kExploring);
+  for (const mission::MissionEvent e : c.eventsFor(m.state())) m.event(e);
+  EXPECT_EQ(m.state(), mission::MissionState::kNearHome);
+  EXPECT_TRUE(m.ended());
+}
+
 TEST(ExplorationController, TheSubmapBudgetEndsTheExplorationOnTheWayHome) {
   ExplorationConfig config = roomConfig();
   config.max_submaps = 5;
@@ -302,36 +350,24 @@ TEST(ExplorationController, TheOperatorsReturnHomeAndAHoldPlanTheWayHomeAgain) {
   EXPECT_EQ(c.ending(), Ending::kNone);
 }
 
-TEST(ExplorationController, NoWayHomeAndBoxedInEndTheMissionWithTheReason) {
-  const map::GridConfig config;
-  auto all = [](const map::VoxelKey&) { return true; };
-  // Two separate known rooms: the vehicle in one, home in the other.
-  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
-  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
-  const auto rooms = plan::test_fixtures::mergedOf(config, {plan::test_fixtures::carvedGrid(config, west, all),
-                                                            plan::test_fixtures::carvedGrid(config, east, all)})
-                         ->snapshot();
+// Sent home from where no safe position is within reach (deep in unknown space): no way at all, the
+// mission ends no_path with the reason and the vehicle holds.
+TEST(ExplorationController, NoWayAtAllEndsTheMissionWithTheReason) {
   auto c = ExplorationController::create(roomConfig()).value();
   SimVehicle v;
   ASSERT_TRUE(c.start(poseOf({-3.0, 0.0, -1.75}, 0.0), kBox, 0, false).ok());
-  v.T = poseOf({3.0, 0.0, -1.75}, 0.0);
-  const StepOutput out = c.step(v.input(rooms)).value();
+  v.T = poseOf({3.0, 0.0, -1.75}, 0.0);  // the unknown half of the room
+  c.returnHome();
+  const StepOutput out = c.step(v.input(halfRoom())).value();
   EXPECT_EQ(out.event, mission::MissionEvent::kNoPath);
   EXPECT_EQ(c.ending(), Ending::kNoPath);
   EXPECT_NE(out.reason.find("no way home"), std::string::npos) << out.reason;
+  EXPECT_NE(out.reason.find("root_tolerance_m"), std::string::npos) << out.reason;
   EXPECT_EQ(out.reason.rfind("no_path: ", 0), 0u) << out.reason;
   ASSERT_TRUE(out.waypoints.has_value());
   EXPECT_TRUE(out.waypoints->empty());  // hold
   EXPECT_FALSE(c.active());
   EXPECT_EQ(c.endingEvent(), mission::MissionEvent::kNoPath);
-
-  // The operator's return home with no way there ends the same way.
-  auto d = ExplorationController::create(roomConfig()).value();
-  ASSERT_TRUE(d.start(poseOf({-3.0, 0.0, -1.75}, 0.0), kBox, 0, false).ok());
-  d.returnHome();
-  const StepOutput home = d.step(v.input(rooms)).value();
-  EXPECT_EQ(home.event, mission::MissionEvent::kNoPath);
-  EXPECT_NE(home.reason.find("no way home"), std::string::npos) << home.reason;
 }
 
 TEST(ExplorationController, PlansThatNeverMoveTheVehicleEndAsStalled) {

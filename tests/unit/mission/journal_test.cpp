@@ -176,10 +176,13 @@ TEST(Journal, MalformedPayloadsAreErrorsNeverMisread) {
   }
   // Out-of-range enums and non-finite values.
   auto state = encodeRecord(MissionStateRecord{5, MissionState::kIdle});
-  state.back() = 6;
+  state.back() = 6;  // near_home, the last state
+  ASSERT_TRUE(decodeRecord(state).ok());
+  EXPECT_EQ(std::get<MissionStateRecord>(decodeRecord(state).value()).state, MissionState::kNearHome);
+  state.back() = 7;
   auto s = decodeRecord(state);
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("state 6"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("state 7"), std::string::npos) << s.error().message;
   auto waypoint = encodeRecord(WaypointRecord{1, 0.0, std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0});
   EXPECT_FALSE(decodeRecord(waypoint).ok());
   std::mt19937_64 rng(1);

@@ -26,6 +26,18 @@ TEST(MissionControl, FullLifecycle) {
   EXPECT_EQ(m.command(MissionCommandKind::kStart).value(), MissionState::kExploring);
 }
 
+TEST(MissionControl, ArrivingNearHomeEndsTheMissionInItsOwnState) {
+  MissionControl m(kBox, MissionState::kExploring);
+  EXPECT_EQ(m.event(MissionEvent::kArrivedNearHome), MissionState::kExploring);  // not returning: ignored
+  EXPECT_EQ(m.event(MissionEvent::kExplorationDone), MissionState::kReturning);
+  EXPECT_EQ(m.event(MissionEvent::kArrivedNearHome), MissionState::kNearHome);
+  EXPECT_FALSE(m.active());
+  EXPECT_TRUE(m.ended());
+  EXPECT_FALSE(m.command(MissionCommandKind::kAbort).ok());  // an end, like complete
+  EXPECT_FALSE(m.command(MissionCommandKind::kPause).ok());
+  EXPECT_EQ(m.command(MissionCommandKind::kStart).value(), MissionState::kExploring);  // a new exploration
+}
+
 TEST(MissionControl, RefusalsNameTheCommandAndState) {
   MissionControl no_box;
   auto r = no_box.command(MissionCommandKind::kStart);

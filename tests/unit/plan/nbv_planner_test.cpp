@@ -348,23 +348,6 @@ TEST(NbvPlanner, GlobalSearchFindsViewsInASafeRegionOffAnyFixedLattice) {
   for (const Waypoint& w : r.waypoints) EXPECT_TRUE(grid.isSafe(w.p_world)) << w.p_world.transpose();
 }
 
-TEST(NbvPlanner, CompleteButNoWayHomeIsNoPath) {
-  const map::GridConfig config;
-  auto all = [](const map::VoxelKey&) { return true; };
-  // Two separate known rooms: the vehicle is in one, home in the other.
-  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
-  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
-  auto map = test_fixtures::mergedOf(
-      config, {test_fixtures::carvedGrid(config, west, all), test_fixtures::carvedGrid(config, east, all)});
-  PlannerConfig c = roomConfig();
-  c.n_tol = 20;  // (the gain is zero everywhere: a smaller tree says so sooner)
-  c.max_samples = 200;
-  auto planner = NbvPlanner::create(c, {{-3.0, 0.0, -1.75}, 0.0}).value();
-  const PlanResult r = planner->plan(map->snapshot(), {{3.0, 0.0, -1.75}, 0.0}).value();
-  EXPECT_EQ(r.status, PlanStatus::kNoPath);
-  EXPECT_NE(r.reason.find("no way home"), std::string::npos) << r.reason;
-}
-
 TEST(NbvPlanner, PlansOnSnapshotsWhileTheMapGrows) {
   // The merge thread adds submaps and publishes snapshots; the planning thread plans on whichever
   // snapshot is newest (thesis 4.5.5). Neither waits for the other beyond swapping a pointer.
@@ -676,6 +659,42 @@ TEST_F(PlannerMaps, AfterAnObstructionTheVehicleBacksOffAndTheKeptBranchIsDroppe
   // Turning on the spot gives no direction; non-finite input is refused.
   EXPECT_FALSE(planner->reportObstruction(stopped, stopped).has_value());
   EXPECT_FALSE(planner->reportObstruction(Eigen::Vector3d(NAN, 0, 0), target).has_value());
+}
+
+// Complete, but home is not reachable through known free space: the way "home" ends at the
+// reachable safe position nearest to home (plan() and planHome() alike), on free edges.
+TEST(NbvPlanner, CompleteButNoWayHomeGoesToTheReachableSafePositionNearestHome) {
+  const map::GridConfig config;
+  auto all = [](const map::VoxelKey&) { return true; };
+  // Two separate known rooms: the vehicle is in one, home in the other.
+  const Eigen::AlignedBox3d west(Eigen::Vector3d(-5.0, -3.0, -3.0), Eigen::Vector3d(-0.5, 3.0, -0.5));
+  const Eigen::AlignedBox3d east(Eigen::Vector3d(0.5, -3.0, -3.0), Eigen::Vector3d(5.0, 3.0, -0.5));
+  auto map = test_fixtures::mergedOf(
+      config, {test_fixtures::carvedGrid(config, west, all), test_fixtures::carvedGrid(config, east, all)});
+  PlannerConfig c = roomConfig();
+  c.n_tol = 20;  // (the gain is zero everywhere: a smaller tree says so sooner)
+  c.max_samples = 200;
+  const Waypoint home{{-3.0, 0.0, -1.75}, 0.0};
+  const Waypoint current{{3.0, 0.0, -1.75}, 0.0};
+  auto planner = NbvPlanner::create(c, home).value();
+  const PlanResult r = planner->plan(map->snapshot(), current).value();
+  ASSERT_EQ(r.status, PlanStatus::kNearHome) << r.reason;
+  EXPECT_NE(r.reason.find("not reachable through known free space"), std::string::npos) << r.reason;
+  ASSERT_FALSE(r.waypoints.empty());
+  const TraversabilityGrid& grid = *planner->traversability();
+  const Eigen::Vector3d end = r.waypoints.back().p_world;
+  ASSERT_TRUE(grid.isSafe(end));
+  // No reachable safe voxel is nearer to home.
+  const auto reachable = grid.reachable(current.p_world, grid.statusArray().size());
+  ASSERT_FALSE(reachable.empty());
+  for (const map::VoxelKey& k : reachable)
+    ASSERT_GE((map::keyToCentre(k, config.resolution_m) - home.p_world).norm(), (end - home.p_world).norm() - 1e-9);
+  EXPECT_LT(end.x(), 2.0);  // the east room's west side, toward home
+  expectPathValid(*map->snapshot(), planner->config(), current, r.waypoints);
+  // The one way home says the same.
+  const PlanResult h = planner->planHome(map->snapshot(), current).value();
+  ASSERT_EQ(h.status, PlanStatus::kNearHome) << h.reason;
+  EXPECT_EQ(h.waypoints.back().p_world, end);
 }
 
 // The clearance widens the checked box's vertical sides only (depth does not drift): a 1.8 m door

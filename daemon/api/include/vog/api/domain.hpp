@@ -17,8 +17,10 @@
 
 namespace vog::api {
 
-// Mission lifecycle: idle -> exploring -> returning -> complete, plus paused and aborted.
-enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted };
+// Mission lifecycle: idle -> exploring -> returning -> complete (or near_home: home was not reachable
+// through known free space, the vehicle waits at the reachable safe position nearest to it), plus
+// paused and aborted.
+enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted, kNearHome };
 enum class PlannerState : std::uint8_t { kIdle, kPlanning, kFollowing, kFinished, kFailed };
 enum class DeviceState : std::uint8_t { kOk, kDegraded, kFailed, kDisconnected };
 enum class Role : std::uint8_t { kObserver, kOperator };

@@ -11,11 +11,12 @@
 //   return     when the planner finds nothing left to explore (its plan is the way home), when the
 //              submap budget is reached, or on the operator's word (returnHome()): the path home
 //              from NbvPlanner::planHome, the one way home;
-//   end        arrived home (kComplete, or kBudget when the budget cut the exploration short), no
-//              path on or home (kNoPath), or the planner kept answering without the vehicle moving
-//              (kStalled).
+//   end        arrived home (kComplete, or kBudget when the budget cut the exploration short), arrived
+//              at the reachable safe position nearest to a home that known free space does not reach
+//              (kNearHome), no path on (kNoPath), or the planner kept answering without the vehicle
+//              moving (kStalled).
 // Events for the mission state machine (mission::MissionControl) come out with the step that
-// caused them: kExplorationDone when it turns home, kArrivedHome, kNoPath. A caller whose operator
+// caused them: kExplorationDone when it turns home, kArrivedHome, kArrivedNearHome, kNoPath. A caller whose operator
 // can hold the mission between a step and its event (vogd: a pause the state machine answers by
 // ignoring the event) asks eventsFor() instead, which says what the mission still has to hear.
 //
@@ -65,7 +66,7 @@ struct ExplorationConfig {
 };
 
 // How a mission ended.
-enum class Ending { kNone, kComplete, kBudget, kNoPath, kStalled };
+enum class Ending { kNone, kComplete, kBudget, kNearHome, kNoPath, kStalled };
 const char* toString(Ending ending);
 
 // The vehicle was stopped short of its waypoint (map frame).
@@ -126,7 +127,8 @@ class ExplorationController {
   const std::string& reason() const { return reason_; }
   // The ending and its reason in one line ("no_path: ..."; "complete" alone when nothing is to be said).
   std::string summary() const;
-  // The mission event the ending stands for (kArrivedHome, kNoPath); none while the mission goes on.
+  // The mission event the ending stands for (kArrivedHome, kArrivedNearHome, kNoPath); none while the
+  // mission goes on.
   std::optional<mission::MissionEvent> endingEvent() const;
   // The events that bring a mission in `state` in line with this controller, in order: none while
   // the mission is held (paused) or over; kExplorationDone when it still explores but the controller
@@ -138,7 +140,8 @@ class ExplorationController {
 
  private:
   explicit ExplorationController(const ExplorationConfig& config) : config_(config) {}
-  // Turns the mission home on `path` (the planner's kComplete result), or ends it when there is none.
+  // Turns the mission home on `path` (the planner's kComplete or kNearHome result), or ends it when
+  // there is none.
   void goHome(Ending why, const plan::PlanResult& path, StepOutput& out);
   void end(Ending ending, std::string reason, StepOutput& out);
 
@@ -149,6 +152,7 @@ class ExplorationController {
   bool returning_ = false;                  // on the way home (or about to plan it)
   bool home_path_sent_ = false;             // the way home was handed to the vehicle
   Ending home_ending_ = Ending::kComplete;  // what arriving home ends the mission as
+  bool short_of_home_ = false;              // the way home sent ends near home, not at it (kNearHome)
   Ending ending_ = Ending::kNone;
   std::string reason_;
   int idle_plans_ = 0;  // plans since the vehicle last moved

@@ -73,8 +73,10 @@ struct WaypointRecord {
   double yaw_rad = 0.0;
 };
 
-// Mission lifecycle; same values as the API's MissionState.
-enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted };
+// Mission lifecycle; same values as the API's MissionState. kNearHome: the exploration is complete,
+// home was not reachable through known free space, the vehicle waits at the reachable safe position
+// nearest to it.
+enum class MissionState : std::uint8_t { kIdle, kExploring, kReturning, kComplete, kPaused, kAborted, kNearHome };
 const char* toString(MissionState state);
 
 struct MissionStateRecord {

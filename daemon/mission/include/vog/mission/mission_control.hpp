@@ -2,10 +2,13 @@
 // MissionControl: the mission lifecycle of vogd as a pure state machine.
 //
 //   idle --start--> exploring --planner done--> returning --arrived home--> complete
+//   returning --arrived near home--> near_home         (home was not reachable through known free
+//                                                       space: the vehicle waits at the reachable
+//                                                       safe position nearest to it)
 //   exploring|returning --pause--> paused --resume--> (the state it was paused in)
 //   exploring|paused --return home--> returning
-//   any but complete|aborted --abort--> aborted        (the vehicle holds where it is)
-//   complete|aborted --start--> exploring              (a new exploration on the same map)
+//   any but an end --abort--> aborted                  (the vehicle holds where it is)
+//   an end (complete|near_home|aborted) --start--> exploring   (a new exploration on the same map)
 //   exploring|returning --no path--> aborted            (the planner found no collision-free way on)
 //
 // The exploration box may be replaced while the mission is not moving (idle, paused, complete,
@@ -35,7 +38,7 @@ enum class MissionCommandKind { kSetBox, kStart, kPause, kResume, kAbort, kRetur
 const char* toString(MissionCommandKind kind);
 
 // What the planner reported to the mission.
-enum class MissionEvent { kExplorationDone, kArrivedHome, kNoPath };
+enum class MissionEvent { kExplorationDone, kArrivedHome, kArrivedNearHome, kNoPath };
 const char* toString(MissionEvent event);
 
 class MissionControl {
@@ -53,6 +56,10 @@ class MissionControl {
   const std::optional<Box>& box() const { return box_; }
   // The vehicle should be moving under the planner: exploring or returning.
   bool active() const { return state_ == MissionState::kExploring || state_ == MissionState::kReturning; }
+  // The mission has ended (complete, near_home or aborted).
+  bool ended() const {
+    return state_ == MissionState::kComplete || state_ == MissionState::kNearHome || state_ == MissionState::kAborted;
+  }
   // Why the mission was last aborted (empty otherwise).
   const std::string& reason() const { return reason_; }
   void setAbortReason(std::string reason) { reason_ = std::move(reason); }

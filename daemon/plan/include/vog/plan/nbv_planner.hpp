@@ -48,7 +48,7 @@
 
 namespace vog::plan {
 
-enum class PlanStatus { kExplore, kComplete, kNoPath };
+enum class PlanStatus { kExplore, kComplete, kNearHome, kNoPath };
 const char* toString(PlanStatus status);
 
 struct TreeNode {
@@ -63,7 +63,8 @@ struct TreeNode {
 struct PlanResult {
   PlanStatus status = PlanStatus::kNoPath;
   // kExplore: the next waypoint (end of the best branch's first edge). kComplete: the path home,
-  // ending at the home pose. kNoPath: empty.
+  // ending at the home pose. kNearHome: home is not reachable through known free space; the path to
+  // the reachable safe position nearest to it. kNoPath: empty.
   std::vector<Waypoint> waypoints;
   std::vector<Waypoint> best_branch;  // kExplore: root .. best node
   double best_value = 0.0;
@@ -71,7 +72,7 @@ struct PlanResult {
   int tree_size = 0;       // nodes including the root
   int samples = 0;         // sampling attempts
   std::uint64_t map_version = 0;
-  std::string reason;         // why kComplete / kNoPath, or "global goal ..." for a global search
+  std::string reason;         // why kComplete / kNearHome / kNoPath, or "global goal ..." for a global search
   bool global_goal = false;   // kExplore toward a goal of the global search
   int global_candidates = 0;  // gain evaluations of the global search (0: not run)
 };
@@ -95,9 +96,11 @@ class NbvPlanner {
 
   // The way home on `snapshot` from `current` (the vehicle's one way home: an exploration that
   // completes ends on the same path): kComplete with a known-free path from the nearest safe voxel
-  // within root_tolerance_m to the home pose, headings turned as in plan(); kNoPath with the reason
-  // when there is none. After reportObstruction() the path starts with the retreat move (as plan()'s
-  // would). Same errors as plan(); it leaves the kept branch and a revisit request for the next plan().
+  // within root_tolerance_m to the home pose, headings turned as in plan(); when home is not
+  // reachable through known free space, kNearHome with the path to the reachable safe voxel nearest
+  // to home (ties: the fewest steps); kNoPath with the reason when the vehicle cannot move at all. After
+  // reportObstruction() the path starts with the retreat move (as plan()'s would). Same errors as plan(); it leaves the
+  // kept branch and a revisit request for the next plan().
   Result<PlanResult> planHome(const std::shared_ptr<const map::MergedMap>& snapshot, const Waypoint& current);
 
   // The vehicle was stopped at p_world on its way to target_world by something the map does not
