@@ -187,6 +187,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   std::string mode_name = "vog-lc";
   std::uint64_t seed = 1;
   int submap_budget = 156;  // thesis Table 4.2
+  double sensor_range_m = geometry::SonarFan{}.max_range_m;
+  double scan_rate_hz = sim::LockstepConfig{}.sonar_rate_hz;
   double max_sim_s = 7200.0;
   int coverage_every = 10;
   std::string out_dir;
@@ -209,6 +211,14 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--global-search", pc.global_search,
                  "planner's global search when the local tree finds no gain (1/0)");
   app.add_option("--global-min-gain", pc.global_min_gain, "planner: gain a global-search view needs to become a goal");
+  app.add_option("--sensor-range", sensor_range_m,
+                 "sonar maximum range d_max^sensor, m (thesis Table 4.2: 11; 4.4: 5.63)")
+      ->check(CLI::Range(1.0, 50.0));
+  app.add_option("--scan-rate", scan_rate_hz, "sonar scans per second FPS_sensor (thesis Table 4.2: 5; 4.4: 10)")
+      ->check(CLI::Range(0.5, 50.0));
+  app.add_option("--planner-range", pc.planner_range_m, "planner: d_max^planner, m (thesis Table 4.2: 5; 4.4: 5.63)");
+  app.add_option("--lambda", pc.lambda, "planner: gain discount per metre of path (thesis Table 4.2: 0.5; 4.4: 0)");
+  app.add_option("--max-edge", pc.max_edge_m, "planner: RRT max edge length, m (thesis Table 4.2: 2; 4.4: 1)");
   app.add_option("--clearance", pc.clearance_m, "planner: clearance between the collision box and non-free space, m");
   app.add_option("--obstruction-feedback", obstruction_feedback,
                  "report a refused move to the planner, which backs the vehicle off the way it came (1/0)");
@@ -257,6 +267,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
 
   // Ground truth for coverage: surface points observable from a collision-free position in the box.
   sim::ObservableConfig oc;
+  oc.max_range_m = sensor_range_m;
   const vog::geometry::PointCloud surface = world.sampleSurface(0.05, seed);
   auto observable = sim::observablePoints(world, world.sampleSurface(0.1, seed), oc);
   if (!observable) return fail(observable.error().message);
@@ -265,6 +276,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   sim::LockstepConfig sc;
   sc.seed = seed;
   sc.frame_every = 0;
+  sc.sonar_rate_hz = scan_rate_hz;
+  sc.sonar.fan.max_range_m = sensor_range_m;
   sc.odometry.profile = sim::OdometryNoiseProfile::kRandomWalk;
   sc.odometry.sigma2_x_m2ps *= 0.25;
   sc.odometry.sigma2_y_m2ps *= 0.25;
@@ -277,6 +290,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   // Mapping: library defaults.
   mc.loop_closures = mode == Mode::kVogLc;
   mc.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
+  mc.builder.fan.max_range_m = sensor_range_m;
   auto pipeline_r = slam::MappingPipeline::create(mc);
   if (!pipeline_r) return fail(pipeline_r.error().message);
   slam::MappingPipeline& pipeline = **pipeline_r;
@@ -527,8 +541,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       iterations.push_back(row);
     }
     if (controller.ending() != explore::Ending::kNone) {
-      end_reason = controller.ending() == explore::Ending::kNoPath ? controller.summary()
-                                                                   : explore::toString(controller.ending());
+      // The ending's word; with its reason when the vehicle did not come home.
+      const bool home =
+          controller.ending() == explore::Ending::kComplete || controller.ending() == explore::Ending::kBudget;
+      end_reason = home ? explore::toString(controller.ending()) : controller.summary();
       break;
     }
     if (out->waypoints)
