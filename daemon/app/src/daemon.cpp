@@ -256,7 +256,7 @@ void Daemon::mappingLoop() {
 
 // ---------------------------------------------------------------- planning thread
 
-Pose3 Daemon::estimatedPose() const { return mapping_->state()->T_map_odom * odometry_.T_odom_vehicle; }
+Pose3 Daemon::estimatedPose(const MappingState& mapped) const { return mapped.T_map_odom * odometry_.T_odom_vehicle; }
 
 Pose3 Daemon::mapFromSource() const {
   const std::lock_guard lock(state_mutex_);
@@ -345,7 +345,7 @@ void Daemon::planningLoop() {
       commands = commands_;
       box = *mission_.box();  // exploring needs a box (MissionControl)
       in.n_submaps = mapped->submaps.size();
-      in.T_world_vehicle = estimatedPose();
+      in.T_world_vehicle = estimatedPose(*mapped);  // the same publication as the submaps below
       in.stamp_ns = odometry_.stamp_ns;
     }
     if (start_now) {
@@ -522,7 +522,7 @@ Status Daemon::run() {
       {
         const std::lock_guard lock(state_mutex_);
         p.stamp_ns = odometry_.stamp_ns;
-        p.T_world_vehicle = estimatedPose();
+        p.T_world_vehicle = estimatedPose(*mapping_->state());
       }
       api_->publishPose(p);
       last_pose = now;
@@ -563,13 +563,13 @@ Status Daemon::run() {
 api::StatusReport Daemon::status() const {
   api::StatusReport s;
   s.devices = source_->health();
+  const std::shared_ptr<const MappingState> mapped = mapping_->state();
   const std::lock_guard lock(state_mutex_);
   s.stamp_ns = odometry_.stamp_ns;
   s.mission_state = toApi(mission_.state());
-  s.T_world_vehicle = estimatedPose();
+  s.T_world_vehicle = estimatedPose(*mapped);
   s.sigma_xyz_m = odometry_.sigma_xyz_m;
   s.sigma_yaw_rad = odometry_.sigma_yaw_rad;
-  const std::shared_ptr<const MappingState> mapped = mapping_->state();
   s.n_submaps = static_cast<std::uint32_t>(mapped->submaps.size());
   s.n_closures = mapped->n_closures;
   s.planner_state = planner_state_;

@@ -205,10 +205,6 @@ void TraversabilityGrid::recompute(KeyBox region) {
   b.min.z() -= r_.z();
   b.max.z() += r_.z();
   b = intersect(b, grid_);
-  auto blockedAt = [&](int x, int y, int z) -> int {
-    const VoxelKey k(x, y, z);
-    return grid_.contains(k) ? (status_[indexOf(k)] != kFree ? 1 : 0) : 1;
-  };
   Volume oy(b);
   if (disc_half_width_.empty()) {
     // A box: separable, pass x over the region widened in y (and z), then pass y.
@@ -239,6 +235,10 @@ void TraversabilityGrid::recompute(KeyBox region) {
   } else {
     // A cylinder: per layer, row prefix counts of blocked voxels, then for each voxel one window per
     // row of the disc.
+    auto blockedAt = [&](int x, int y, int z) -> int {
+      const VoxelKey k(x, y, z);
+      return grid_.contains(k) ? (status_[indexOf(k)] != kFree ? 1 : 0) : 1;
+    };
     const int r = r_.y();
     const int x0 = region.min.x() - r, nx = region.max.x() + r - x0 + 1;
     const int y0 = region.min.y() - r, ny = region.max.y() + r - y0 + 1;

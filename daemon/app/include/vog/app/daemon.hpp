@@ -94,7 +94,8 @@ class Daemon final : public api::ApiBackend, private SourceSink {
 
   void mappingLoop();
   void planningLoop();
-  geometry::Pose3 estimatedPose() const;  // map frame; the caller holds state_mutex_
+  // The vehicle in the map frame, by the given published mapping state; the caller holds state_mutex_.
+  geometry::Pose3 estimatedPose(const MappingState& mapped) const;
   geometry::Pose3 mapFromSource() const;  // T_map_source: the source's odometry frame in the map (locks state)
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
   // Logs and journals a mission state; the caller holds state_mutex_.

@@ -56,8 +56,7 @@ class MappingStage {
   void finish(bool store_active);
 
   std::shared_ptr<const MappingState> state() const;
-  const slam::MappingPipeline& pipeline() const { return *pipeline_; }  // mapping thread
-  std::uint64_t rejectedScans() const { return rejected_scans_; }       // mapping thread
+  std::uint64_t rejectedScans() const { return rejected_scans_; }  // mapping thread
 
  private:
   Status persist(const slam::MappingUpdate& update);
