@@ -35,7 +35,9 @@ Result<MissionState> MissionControl::command(MissionCommandKind kind, const std:
   switch (kind) {
     case MissionCommandKind::kSetBox:
       if (!box) return Error{"set box without a box"};
-      if (active()) return refuse("pause or abort first");
+      // The running exploration keeps the box it started with: a new box is for the next start.
+      if (active() || state_ == MissionState::kPaused)
+        return refuse("abort first, or set it once the mission has ended");
       box_ = box;
       return state_;
     case MissionCommandKind::kStart:

@@ -50,7 +50,12 @@ TEST(MissionControl, RefusalsNameTheCommandAndState) {
   EXPECT_EQ(m.command(MissionCommandKind::kStart).error().message, "start refused while exploring");
   EXPECT_EQ(m.command(MissionCommandKind::kResume).error().message, "resume refused while exploring");
   EXPECT_EQ(m.command(MissionCommandKind::kSetBox, kBox).error().message,
-            "set box refused while exploring: pause or abort first");
+            "set box refused while exploring: abort first, or set it once the mission has ended");
+  // Paused, the exploration still holds its box: a new one would be explored by nobody.
+  EXPECT_EQ(m.command(MissionCommandKind::kPause).value(), MissionState::kPaused);
+  EXPECT_EQ(m.command(MissionCommandKind::kSetBox, kBox).error().message,
+            "set box refused while paused: abort first, or set it once the mission has ended");
+  EXPECT_EQ(m.command(MissionCommandKind::kResume).value(), MissionState::kExploring);
   EXPECT_FALSE(m.command(MissionCommandKind::kSetBox).ok());  // no box given
   EXPECT_EQ(m.command(MissionCommandKind::kAbort).value(), MissionState::kAborted);
   EXPECT_EQ(m.reason(), "aborted by the operator");

@@ -11,8 +11,8 @@
 //   an end (complete|near_home|aborted) --start--> exploring   (a new exploration on the same map)
 //   exploring|returning --no path--> aborted            (the planner found no collision-free way on)
 //
-// The exploration box may be replaced while the mission is not moving (idle, paused, complete,
-// aborted); exploring needs a box. Every refused transition returns an error that names the command
+// The exploration box may be replaced while no exploration holds it (idle, or after an end: the box of
+// the next start); exploring needs a box. Every refused transition returns an error that names the command
 // and the state. Lifecycle: construct (optionally resumed from a journaled state: exploring and
 // returning resume as they were, paused resumes paused); no threads (the caller serialises).
 
