@@ -201,7 +201,11 @@ Result<PlanResult> NbvPlanner::planHome(const std::shared_ptr<const map::MergedM
     start.p_world = *snapped;
   }
   result = fromRoot(start, from, goHome(start, std::move(result)));
-  if (back && result.status != PlanStatus::kNoPath) result.waypoints.insert(result.waypoints.begin(), from);
+  if (back && result.status != PlanStatus::kNoPath) {
+    std::vector<Waypoint> waypoints{from};
+    waypoints.insert(waypoints.end(), result.waypoints.begin(), result.waypoints.end());
+    result.waypoints = std::move(waypoints);
+  }
   return result;
 }
 
