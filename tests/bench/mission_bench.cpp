@@ -187,7 +187,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   std::string mode_name = "vog-lc";
   std::uint64_t seed = 1;
   int submap_budget = 156;  // thesis Table 4.2
-  double sensor_range_m = geometry::SonarFan{}.max_range_m;
+  double sensor_range_m = vog::geometry::SonarFan{}.max_range_m;
   double scan_rate_hz = sim::LockstepConfig{}.sonar_rate_hz;
   double max_sim_s = 7200.0;
   int coverage_every = 10;
