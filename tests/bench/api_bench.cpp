@@ -3,10 +3,14 @@
 // to the client's receipt (p50/p99/max; target p99 <= 10 ms). Then a snapshot of a merged
 // map of about one million known voxels fetched from version 0 by one client (target <= 1 s).
 // Server and clients share this process (and its 2 cores); RSS and CPU are the whole process's.
+// With --stalled-readers: 64 observers each ask for the whole map 16 times and never read (a map of
+// about 20 MB encoded, as a 157-submap mission's) while one client asks for the status: the RSS
+// growth over idle (target <= 300 MB) and the status latency (p50/p99; target p99 < 100 ms).
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/api/api_server.hpp"
+#include "vog/api/framing.hpp"
 #include "vog/client/api_client.hpp"
 
 #include <CLI/CLI.hpp>
@@ -15,6 +19,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <fstream>
@@ -92,11 +97,108 @@ double rssMb() {
   return 0.0;
 }
 
+// The resident set now (VmRSS), MB.
+double rssNowMb() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
 double cpuSeconds() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
          static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// Observers that request the whole map `requests` times each and never read, and one client asking
+// for the status every 20 ms for `duration_s`.
+int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int requests, double duration_s) {
+  BenchBackend backend(map);
+  asio::io_context io;
+  api::ApiServerConfig config;
+  config.dispatch.operator_secret = vog::bench::kOperatorSecret;
+  config.max_clients = static_cast<std::size_t>(observers) + 8;
+  config.max_clients_per_peer = config.max_clients;  // every client is on loopback
+  config.max_in_flight = std::max<std::size_t>(config.max_in_flight, static_cast<std::size_t>(requests));
+  config.max_queued_responses = std::max(config.max_queued_responses, config.max_in_flight);
+  auto server = api::ApiServer::create(io, backend, config);
+  if (!server) {
+    std::fprintf(stderr, "vog-bench api: %s\n", server.error().message.c_str());
+    return 1;
+  }
+  const auto port = (*server)->listen("127.0.0.1", 0);
+  if (!port) {
+    std::fprintf(stderr, "vog-bench api: %s\n", port.error().message.c_str());
+    return 1;
+  }
+  std::thread io_thread([&] { io.run(); });
+  auto status_client = client::ApiClient::connect("127.0.0.1", *port);
+  if (!status_client || !(*status_client)->status().ok()) {
+    std::fprintf(stderr, "vog-bench api: the status client cannot connect\n");
+    return 1;
+  }
+  const double rss_idle_mb = rssNowMb();
+
+  std::string bytes;
+  for (int r = 1; r <= requests; ++r) {
+    v1::Envelope e;
+    e.set_request_id(static_cast<std::uint64_t>(r));
+    e.mutable_get_map()->set_since_version(0);
+    bytes += api::encodeFrame(e).value();
+  }
+  std::vector<std::unique_ptr<client::ApiClient>> stalled;
+  int failures = 0;
+  for (int i = 0; i < observers; ++i) {
+    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    if (!c || !(*c)->sendRaw(bytes).ok()) {
+      ++failures;
+      continue;
+    }
+    stalled.push_back(std::move(*c));
+  }
+
+  std::vector<double> status_ms;
+  double rss_peak_mb = rssNowMb();
+  const bench::Stopwatch run;
+  while (run.seconds() < duration_s) {
+    const bench::Stopwatch sw;
+    if (!(*status_client)->status().ok()) ++failures;
+    status_ms.push_back(sw.seconds() * 1e3);
+    rss_peak_mb = std::max(rss_peak_mb, rssNowMb());
+    std::this_thread::sleep_for(20ms);
+  }
+  const api::ApiServerStats stats = (*server)->stats();
+  stalled.clear();
+  (*server)->stop();
+  io.stop();
+  io_thread.join();
+
+  bench::JsonObject out;
+  out.add("mode", std::string("stalled-readers"));
+  out.add("stalled_observers", observers);
+  out.add("map_requests_each", requests);
+  out.add("map_blocks", static_cast<std::int64_t>(map->blockCount()));
+  out.add("map_encoded_mb", static_cast<double>(map->blockCount()) * 2150.0 / 1e6);
+  out.add("client_failures", failures);
+  out.add("status_requests", static_cast<std::int64_t>(status_ms.size()));
+  out.add("status_latency_p50_ms", bench::percentile(status_ms, 0.5));
+  out.add("status_latency_p99_ms", bench::percentile(status_ms, 0.99));
+  out.add("status_latency_p99_target_ms", 100.0);
+  out.add("rss_idle_mb", rss_idle_mb);
+  out.add("rss_peak_mb", rss_peak_mb);
+  out.add("rss_growth_mb", rss_peak_mb - rss_idle_mb);
+  out.add("rss_growth_target_mb", 300.0);
+  out.add("server_queued_mb", static_cast<double>(stats.queued_bytes) / 1e6);
+  out.add("server_max_session_queued_mb", static_cast<double>(stats.max_session_queued_bytes) / 1e6);
+  out.add("server_max_queued_mb_per_client", static_cast<double>(config.max_queued_bytes) / 1e6);
+  out.add("server_write_timeout_disconnects", static_cast<std::int64_t>(stats.slow_disconnects));
+  out.add("note", std::string("server and all clients in one process on loopback; the clients never read"));
+  std::printf("%s\n", out.str().c_str());
+  return failures == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -107,13 +209,24 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   double rate_hz = 200.0;
   int side = 100;
   bool json = false;
+  bool stalled_readers = false;
+  double duration_s = 5.0;
   CLI::App app{"vog-bench api"};
   app.add_option("--observers", observers, "observer clients subscribed to every stream")->check(CLI::Range(1, 200));
   app.add_option("--waypoints", waypoints, "waypoints published")->check(CLI::Range(10, 1000000));
   app.add_option("--rate", rate_hz, "waypoints (and poses) published per second")->check(CLI::Range(1.0, 100000.0));
   app.add_option("--side", side, "the snapshot map is a cube of side^3 voxels")->check(CLI::Range(8, 400));
   app.add_flag("--json", json, "print JSON (the only output format)");
+  app.add_flag("--stalled-readers", stalled_readers,
+               "observers request the whole map 16 times each and never read (--observers, default 64; "
+               "--side, default 170: about 20 MB encoded); RSS growth and status latency");
+  app.add_option("--duration", duration_s, "--stalled-readers: seconds of status requests")
+      ->check(CLI::Range(1.0, 600.0));
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
+  if (stalled_readers) {
+    if (app.count("--observers") == 0) observers = 64;
+    if (app.count("--side") == 0) side = 170;
+  }
 
   const bench::Stopwatch build_clock;
   auto map = buildCubeMap(side);
@@ -123,6 +236,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   }
   std::fprintf(stderr, "built a map of %zu known voxels in %zu blocks in %.1f s\n", (*map)->knownVoxelCount(),
                (*map)->blockCount(), build_clock.seconds());
+  if (stalled_readers) return stalledReaders(*map, observers, 16, duration_s);
   BenchBackend backend(*map);
 
   asio::io_context io;

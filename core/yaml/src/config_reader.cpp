@@ -78,6 +78,10 @@ std::string ConfigMap::path(const std::string& key) const { return path_.empty()
 
 bool ConfigMap::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
 
+std::string ConfigMap::location(const std::string& key) const {
+  return yaml::location(reader_->source_, has(key) ? node_[key] : node_);
+}
+
 std::optional<YAML::Node> ConfigMap::get(const std::string& key) {
   read_.insert(key);
   if (reader_->failed() || !node_.IsMap()) return std::nullopt;

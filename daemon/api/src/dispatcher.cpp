@@ -3,6 +3,7 @@
 #include "vog/api/convert.hpp"
 #include "vog/api/framing.hpp"
 #include "vog/api/map_delta.hpp"
+#include "vog/v1/map.pb.h"
 
 #include <algorithm>
 
@@ -22,46 +23,44 @@ Reply errorReply(std::uint64_t id, v1::ErrorCode code, std::string message, bool
   return r;
 }
 
-// Map transfer: the whole delta is encoded once from the immutable snapshot; each chunk moves its
-// share of keys and blocks out of it (proto/README.md "GetMap").
+// Map transfer from the held immutable snapshot (proto/README.md "GetMap"): the block list is taken
+// when the first chunk is asked for (a transfer queued behind others holds only the snapshot), and
+// each chunk encodes only its own blocks, so no transfer ever holds the encoded map. The removed keys
+// come first, then the changed blocks, in the order of blocksChangedSince: the same frames as slicing
+// encodeMapDelta's result.
 class MapChunks final : public ChunkSource {
  public:
-  MapChunks(std::uint64_t id, v1::MapDelta delta, std::size_t blocks_per_chunk)
-      : id_(id), full_(std::move(delta)), blocks_per_chunk_(blocks_per_chunk) {
-    // A removed key costs at most 20 bytes on the wire, a block about 2150: 64 keys per block slot.
-    removed_per_chunk_ = blocks_per_chunk_ * 64;
-    const std::size_t n_removed = static_cast<std::size_t>(full_.removed_size());
-    const std::size_t n_changed = static_cast<std::size_t>(full_.changed_size());
-    const std::size_t removed_chunks = (n_removed + removed_per_chunk_ - 1) / removed_per_chunk_;
-    const std::size_t changed_chunks = (n_changed + blocks_per_chunk_ - 1) / blocks_per_chunk_;
-    count_ = std::max<std::size_t>(1, removed_chunks + changed_chunks);
-  }
+  MapChunks(std::uint64_t id, std::shared_ptr<const map::MergedMap> snapshot, std::uint64_t since_version,
+            std::size_t blocks_per_chunk)
+      : id_(id),
+        snapshot_(std::move(snapshot)),
+        since_version_(since_version),
+        blocks_per_chunk_(blocks_per_chunk),
+        // A removed key costs at most 20 bytes on the wire, a block about 2150: 64 keys per block slot.
+        removed_per_chunk_(blocks_per_chunk * 64) {}
 
-  bool done() const override { return index_ >= count_; }
+  bool done() const override { return started_ && index_ >= count_; }
   std::uint64_t requestId() const override { return id_; }
 
   v1::Envelope next() override {
+    if (!started_) start();
     v1::Envelope out;
     out.set_request_id(id_);
     auto* chunk = out.mutable_map_chunk();
     chunk->set_chunk_index(static_cast<std::uint32_t>(index_));
     chunk->set_chunk_count(static_cast<std::uint32_t>(count_));
-    chunk->set_blocks_total(static_cast<std::uint64_t>(full_.changed_size()));
-    chunk->set_removed_total(static_cast<std::uint64_t>(full_.removed_size()));
+    chunk->set_blocks_total(static_cast<std::uint64_t>(changed_.size()));
+    chunk->set_removed_total(static_cast<std::uint64_t>(removed_.size()));
     auto* delta = chunk->mutable_delta();
-    *delta->mutable_grid() = full_.grid();
-    delta->set_since_version(full_.since_version());
-    delta->set_version(full_.version());
-    delta->set_n_submaps(full_.n_submaps());
-    const auto n_removed = static_cast<std::size_t>(full_.removed_size());
-    if (removed_at_ < n_removed) {
-      const std::size_t end = std::min(n_removed, removed_at_ + removed_per_chunk_);
-      for (; removed_at_ < end; ++removed_at_) *delta->add_removed() = full_.removed(static_cast<int>(removed_at_));
+    encodeDeltaHeader(*snapshot_, since_version_, *delta);
+    if (removed_at_ < removed_.size()) {
+      const std::size_t end = std::min(removed_.size(), removed_at_ + removed_per_chunk_);
+      for (; removed_at_ < end; ++removed_at_) encodeRemoved(removed_[removed_at_], *delta->add_removed());
     } else {
-      const auto n_changed = static_cast<std::size_t>(full_.changed_size());
-      const std::size_t end = std::min(n_changed, changed_at_ + blocks_per_chunk_);
+      const std::size_t end = std::min(changed_.size(), changed_at_ + blocks_per_chunk_);
       for (; changed_at_ < end; ++changed_at_) {
-        delta->add_changed()->Swap(full_.mutable_changed(static_cast<int>(changed_at_)));
+        encodeBlock(bounds_, changed_[changed_at_].first, *changed_[changed_at_].second, *delta->add_changed());
+        changed_[changed_at_].second.reset();  // sent: the snapshot may go once the transfer ends
       }
     }
     ++index_;
@@ -69,10 +68,25 @@ class MapChunks final : public ChunkSource {
   }
 
  private:
+  void start() {
+    started_ = true;
+    bounds_ = snapshot_->config().bounds();
+    changed_ = snapshot_->blocksChangedSince(since_version_);
+    removed_ = snapshot_->blocksRemovedSince(since_version_);
+    const std::size_t removed_chunks = (removed_.size() + removed_per_chunk_ - 1) / removed_per_chunk_;
+    const std::size_t changed_chunks = (changed_.size() + blocks_per_chunk_ - 1) / blocks_per_chunk_;
+    count_ = std::max<std::size_t>(1, removed_chunks + changed_chunks);
+  }
+
   std::uint64_t id_;
-  v1::MapDelta full_;
+  std::shared_ptr<const map::MergedMap> snapshot_;
+  std::uint64_t since_version_;
   std::size_t blocks_per_chunk_;
-  std::size_t removed_per_chunk_ = 0;
+  std::size_t removed_per_chunk_;
+  bool started_ = false;
+  map::LogOddsBounds bounds_;
+  std::vector<std::pair<map::VoxelKey, std::shared_ptr<const map::MergedMap::Block>>> changed_;
+  std::vector<map::VoxelKey> removed_;
   std::size_t count_ = 1;
   std::size_t index_ = 0;
   std::size_t removed_at_ = 0;
@@ -297,9 +311,8 @@ Reply Dispatcher::map(std::uint64_t id, const v1::GetMap& request) {
   std::size_t per_chunk =
       request.max_blocks_per_chunk() == 0 ? config_.map_blocks_per_chunk : request.max_blocks_per_chunk();
   per_chunk = std::clamp<std::size_t>(per_chunk, 1, max_blocks);
-  auto chunks = std::make_unique<MapChunks>(id, encodeMapDelta(*snapshot, request.since_version()), per_chunk);
   Reply r;
-  r.chunks = std::move(chunks);
+  r.chunks = std::make_unique<MapChunks>(id, snapshot, request.since_version(), per_chunk);
   return r;
 }
 

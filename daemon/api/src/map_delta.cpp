@@ -20,8 +20,7 @@ int floorDiv8(int v) { return v >> map::MergedMap::kBlockBits; }
 
 }  // namespace
 
-v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_version) {
-  v1::MapDelta delta;
+void encodeDeltaHeader(const map::MergedMap& snapshot, std::uint64_t since_version, v1::MapDelta& delta) {
   const map::LogOddsBounds bounds = snapshot.config().bounds();
   auto* grid = delta.mutable_grid();
   grid->set_resolution_m(snapshot.resolution());
@@ -31,31 +30,41 @@ v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_
   delta.set_since_version(since_version);
   delta.set_version(snapshot.version());
   delta.set_n_submaps(static_cast<std::uint32_t>(snapshot.submapCount()));
+}
 
+void encodeBlock(const map::LogOddsBounds& bounds, const map::VoxelKey& origin, const map::MergedMap::Block& block,
+                 v1::VoxelBlock& out) {
+  out.set_origin_x(origin.x());
+  out.set_origin_y(origin.y());
+  out.set_origin_z(origin.z());
+  out.set_version(block.version);
+  std::string known(kVoxels / 8, '\0');
+  std::string values(kVoxels * sizeof(float), '\0');
+  for (int i = 0; i < kVoxels; ++i) {
+    const auto idx = static_cast<std::size_t>(i);
+    if (block.count(idx) == 0) continue;
+    known[idx / 8] = static_cast<char>(known[idx / 8] | (1 << (i % 8)));
+    const auto value = static_cast<float>(bounds.clamp(block.sum(idx)));
+    std::memcpy(values.data() + idx * sizeof(float), &value, sizeof(float));
+  }
+  out.set_known(std::move(known));
+  out.set_log_odds(std::move(values));
+}
+
+void encodeRemoved(const map::VoxelKey& origin, v1::BlockKey& out) {
+  out.set_origin_x(origin.x());
+  out.set_origin_y(origin.y());
+  out.set_origin_z(origin.z());
+}
+
+v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_version) {
+  v1::MapDelta delta;
+  encodeDeltaHeader(snapshot, since_version, delta);
+  const map::LogOddsBounds bounds = snapshot.config().bounds();
   for (const auto& [origin, block] : snapshot.blocksChangedSince(since_version)) {
-    auto* out = delta.add_changed();
-    out->set_origin_x(origin.x());
-    out->set_origin_y(origin.y());
-    out->set_origin_z(origin.z());
-    out->set_version(block->version);
-    std::string known(kVoxels / 8, '\0');
-    std::string values(kVoxels * sizeof(float), '\0');
-    for (int i = 0; i < kVoxels; ++i) {
-      const auto idx = static_cast<std::size_t>(i);
-      if (block->count(idx) == 0) continue;
-      known[idx / 8] = static_cast<char>(known[idx / 8] | (1 << (i % 8)));
-      const auto value = static_cast<float>(bounds.clamp(block->sum(idx)));
-      std::memcpy(values.data() + idx * sizeof(float), &value, sizeof(float));
-    }
-    out->set_known(std::move(known));
-    out->set_log_odds(std::move(values));
+    encodeBlock(bounds, origin, *block, *delta.add_changed());
   }
-  for (const auto& origin : snapshot.blocksRemovedSince(since_version)) {
-    auto* out = delta.add_removed();
-    out->set_origin_x(origin.x());
-    out->set_origin_y(origin.y());
-    out->set_origin_z(origin.z());
-  }
+  for (const auto& origin : snapshot.blocksRemovedSince(since_version)) encodeRemoved(origin, *delta.add_removed());
   return delta;
 }
 

@@ -11,8 +11,6 @@
 #include <asio/steady_timer.hpp>
 #include <spdlog/spdlog.h>
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -67,20 +65,6 @@ class SpdlogApiLogger final : public api::ApiLogger {
 };
 SpdlogApiLogger g_api_logger;
 
-Result<std::string> readSecret(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return Error{"api.secret_file: cannot read " + file.string()};
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string secret = ss.str();
-  while (!secret.empty() && (secret.back() == '\n' || secret.back() == '\r')) secret.pop_back();
-  if (secret.size() < 16) return Error{"api.secret_file: " + file.string() + " holds fewer than 16 bytes"};
-  struct stat st {};
-  if (::stat(file.c_str(), &st) == 0 && (st.st_mode & (S_IRWXG | S_IRWXO)) != 0)
-    spdlog::warn("api.secret_file {} is readable by group or others; chmod 600 it", file.string());
-  return secret;
-}
-
 }  // namespace
 
 Result<std::unique_ptr<Daemon>> Daemon::create(const VogdConfig& config, const DaemonOptions& options) {
@@ -118,8 +102,8 @@ Status Daemon::init() {
   if (resume.journal_tail.torn || resume.uncommitted_records > 0)
     spdlog::warn("mission {}: discarded a torn journal tail ({} bytes) and {} records of an unfinished submap",
                  mission_dir_.string(), resume.journal_tail.discarded_bytes, resume.uncommitted_records);
-  mission::RawLogContents raw_existing;
-  auto raw = mission::RawLog::open(mission_dir_ / mission::MissionStore::kRawLogFile, &raw_existing);
+  auto raw =
+      mission::RawLog::open(mission_dir_ / mission::MissionStore::kRawLogFile, config_.mission.raw_log_max_bytes);
   if (!raw) return Error{"raw log: " + raw.error().message};
   raw_ = std::make_unique<RawRecorder>(std::move(raw).value());
 
@@ -143,6 +127,7 @@ Status Daemon::init() {
     mission_started_ = s == mission::MissionState::kExploring || s == mission::MissionState::kReturning ||
                        s == mission::MissionState::kPaused;
     mapping_enabled_ = mission_started_;
+    raw_->setRecording(!mission_.ended());
   }
   std::optional<Pose3> sim_start;
   if (resumed) {
@@ -184,14 +169,10 @@ Status Daemon::init() {
     source_ = std::move(source).value();
   }
 
-  api::ApiServerConfig ac;
-  ac.max_clients = static_cast<std::size_t>(config_.api.max_clients);
-  ac.dispatch.max_frame_bytes = config_.api.max_frame_bytes;
-  ac.tls.certificate_chain_file = config_.api.tls_certificate_file;
-  ac.tls.private_key_file = config_.api.tls_private_key_file;
+  api::ApiServerConfig ac = config_.api.server;
   if (!config_.api.secret_file.empty()) {
-    auto secret = readSecret(config_.api.secret_file);
-    if (!secret) return secret.error();
+    auto secret = readSecretFile(config_.api.secret_file);
+    if (!secret) return Error{"api.secret_file: " + secret.error().message};
     ac.dispatch.operator_secret = *secret;
   }
   auto server = api::ApiServer::create(io_, *this, ac, &g_api_logger);
@@ -237,6 +218,7 @@ void Daemon::onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::spa
 void Daemon::mappingLoop() {
   while (!stopping_) {
     ++mapping_beat_;
+    mapping_->retryStorage();
     std::optional<QueuedScan> item = scans_.pop(std::chrono::milliseconds(200));
     if (!item) continue;
     auto mapped = mapping_->process(*item, mapping_enabled_.load());
@@ -284,6 +266,7 @@ Status Daemon::sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, s
 }
 
 void Daemon::recordStateLocked(mission::MissionState state) {
+  raw_->setRecording(!mission_.ended());  // before the gate opens; stops at the gate that closes
   mapping_enabled_ = state == mission::MissionState::kExploring || state == mission::MissionState::kReturning ||
                      state == mission::MissionState::kPaused;
   spdlog::info("mission: {}{}", mission::toString(state),
@@ -563,6 +546,7 @@ Status Daemon::run() {
 api::StatusReport Daemon::status() const {
   api::StatusReport s;
   s.devices = source_->health();
+  s.devices.push_back(mapping_->storageHealth());
   const std::shared_ptr<const MappingState> mapped = mapping_->state();
   const std::lock_guard lock(state_mutex_);
   s.stamp_ns = odometry_.stamp_ns;

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <string>
+#include <vector>
 #include <utility>
 
 namespace vog::app {
@@ -52,7 +53,53 @@ void MappingStage::finish(bool store_active) {
       if (auto st = persist(*update); !st) spdlog::error("mission store at shutdown: {}", st.error().message);
     }
   }
-  if (auto st = raw_.sync(); !st) spdlog::error("raw log: {}", st.error().message);
+  const mission::StorageHealth left = store_.retryPending();
+  if (left.pending_submaps > 0)
+    spdlog::error("mission store at shutdown: {} closed submaps could not be stored: {}", left.pending_submaps,
+                  left.fault ? left.fault->message : std::string("unknown error"));
+  raw_.sync();
+}
+
+void MappingStage::retryStorage() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_retry_ < std::chrono::seconds(1)) return;
+  last_retry_ = now;
+  if (!store_.health().fault) return;
+  logStorage(store_.retryPending());
+}
+
+void MappingStage::logStorage(const mission::StorageHealth& health) {
+  if (health.fault && !storage_fault_logged_) {
+    spdlog::error("mission store: {} ({} submaps pending; mapping goes on, retrying)", health.fault->message,
+                  health.pending_submaps);
+    storage_fault_logged_ = true;
+  } else if (!health.fault && storage_fault_logged_) {
+    spdlog::info("mission store: the pending submaps are stored");
+    storage_fault_logged_ = false;
+  }
+}
+
+api::DeviceHealth MappingStage::storageHealth() const {
+  const mission::StorageHealth store = store_.health();
+  const RawRecorder::Health raw = raw_.health();
+  api::DeviceHealth h;
+  h.name = "storage";
+  std::vector<std::string> notes;
+  if (store.fault) {
+    h.state = api::DeviceState::kDegraded;
+    notes.push_back(store.fault->message + " (" + std::to_string(store.pending_submaps) + " submaps pending)");
+  }
+  if (raw.fault) {
+    h.state = api::DeviceState::kDegraded;
+    notes.push_back("raw log stopped: " + *raw.fault);
+  }
+  if (raw.dropped_segments > 0)
+    notes.push_back("raw log: " + std::to_string(raw.dropped_segments) + " oldest segments (" +
+                    std::to_string(raw.dropped_bytes) + " bytes) dropped to stay within mission.raw_log_max_bytes");
+  if (!raw.recording) notes.push_back("raw log: recording stopped (the mission ended)");
+  for (const std::string& n : notes) h.detail += (h.detail.empty() ? "" : "; ") + n;
+  h.errors = store.pending_submaps;
+  return h;
 }
 
 std::shared_ptr<const MappingState> MappingStage::state() const {
@@ -64,7 +111,8 @@ Status MappingStage::persist(const slam::MappingUpdate& update) {
   // Durable first (the journal group is the commit), then visible to the merge and the API.
   if (update.closed_submap) {
     if (auto st = store_.onUpdate(*pipeline_, update); !st) return st;
-    if (auto st = raw_.sync(); !st) return st;
+    logStorage(store_.health());
+    raw_.sync();
     spdlog::info("submap {} closed ({} scans){}", *update.closed_submap, pipeline_->submaps().back().n_scans,
                  update.closures.empty() ? "" : ", " + std::to_string(update.closures.size()) + " loop closures");
   }

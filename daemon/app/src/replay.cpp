@@ -7,6 +7,8 @@
 #include "vog/mission/raw_log.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <optional>
 
 namespace vog::app {
@@ -14,11 +16,17 @@ namespace vog::app {
 Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesystem::path& mission_dir,
                                   const std::filesystem::path& out_dir) {
   const std::filesystem::path raw_file = mission_dir / mission::MissionStore::kRawLogFile;
-  if (!std::filesystem::exists(raw_file)) return Error{"replay: no raw log " + raw_file.string()};
   if (std::filesystem::exists(out_dir / mission::MissionStore::kJournalFile))
     return Error{"replay: " + out_dir.string() + " already holds a mission; give an empty or new folder"};
   auto raw = mission::readRawLog(raw_file);
   if (!raw) return Error{"replay: " + raw.error().message};
+  ReplayStats stats;
+  stats.dropped_segments = raw->dropped_segments;
+  if (raw->dropped_segments > 0)
+    spdlog::warn(
+        "replay: the {} oldest segments of the raw log were dropped while recording "
+        "(mission.raw_log_max_bytes); replaying the {} left, from {} ns",
+        raw->dropped_segments, raw->segments, raw->records.empty() ? 0 : raw->records.front().stamp_ns);
   auto store = mission::MissionStore::open(out_dir, config.mapping.builder.grid);
   if (!store) return Error{"replay: " + store.error().message};
   auto pipeline = slam::MappingPipeline::create(config.mapping);
@@ -33,7 +41,6 @@ Result<ReplayStats> replayMission(const VogdConfig& config, const std::filesyste
   }
   FeedOutput decoded;
 
-  ReplayStats stats;
   auto persist = [&](const Result<slam::MappingUpdate>& update) -> Status {
     if (!update) {
       ++stats.rejected_scans;  // live mapping refused the same scan and went on

@@ -1,10 +1,23 @@
 #include "vog/app/vogd_config.hpp"
 
+#include "vog/api/limits.hpp"
+#include "vog/api/tls_context.hpp"
 #include "vog/yaml/config_reader.hpp"
 
+#include <asio/ip/address.hpp>
+#include <asio/ssl/context.hpp>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -215,6 +228,118 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   m.finish();
 }
 
+// The bounds of limits.hpp for the field types of ApiServerConfig.
+template <class T>
+void readCount(ConfigMap& m, const char* key, T& field, api::Range<std::uint64_t> range) {
+  std::uint64_t v = field;
+  m.unsignedInteger(key, v, range.min, range.max);
+  field = static_cast<T>(v);
+}
+
+void readInt(ConfigMap& m, const char* key, int& field, api::Range<std::int64_t> range) {
+  m.integer(key, field, static_cast<int>(std::max<std::int64_t>(range.min, INT_MIN)),
+            static_cast<int>(std::min<std::int64_t>(range.max, INT_MAX)));
+}
+
+void readMillis(ConfigMap& m, const char* key, std::chrono::milliseconds& field, api::Range<std::int64_t> range) {
+  int ms = static_cast<int>(field.count());
+  readInt(m, key, ms, range);
+  field = std::chrono::milliseconds(ms);
+}
+
+// Records an error of `section` ("section.key: what", the form of every validate() and of
+// api::makeTlsContext) at that key's line when the file gives the key, else at its mapping's line.
+void failAtNamedKey(ConfigMap root, const std::string& section, const std::string& message) {
+  const std::size_t colon = message.find(": ");
+  std::string key = colon == std::string::npos ? std::string() : message.substr(0, colon);
+  if (!key.starts_with(section + ".") || key.find(' ') != std::string::npos) return root.fail(section, message);
+  ConfigMap m = root;
+  const std::string what = message.substr(colon + 2);
+  for (std::size_t dot = key.find('.'); dot != std::string::npos && m.has(key.substr(0, dot)); dot = key.find('.')) {
+    m = m.map(key.substr(0, dot));
+    key = key.substr(dot + 1);
+  }
+  m.fail(key, what);
+}
+
+// The smallest max_frame_bytes for which DispatchConfig::validate() accepts the chunk sizes (its rule,
+// searched: what fits in a frame grows with the frame); nullopt when no allowed frame size fits them.
+std::optional<std::uint64_t> minFrameBytes(api::DispatchConfig d) {
+  std::uint64_t lo = api::limits::kMaxFrameBytes.min, hi = api::limits::kMaxFrameBytes.max;
+  d.max_frame_bytes = static_cast<std::uint32_t>(hi);
+  if (!d.validate().ok()) return std::nullopt;
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    d.max_frame_bytes = static_cast<std::uint32_t>(mid);
+    if (d.validate().ok()) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
+    }
+  }
+  return lo;
+}
+
+// The api section: every setting of ApiServerConfig in the ranges of vog/api/limits.hpp, then the
+// server's own cross-field rules and the files it will open, each reported at its key's line.
+void readApi(ConfigMap& root, ApiSection& a, const std::filesystem::path& base_dir) {
+  namespace lim = api::limits;
+  api::ApiServerConfig& s = a.server;
+  ConfigMap m = root.map("api");
+  m.text("bind_address", a.bind_address);
+  asio::error_code ec;
+  (void)asio::ip::make_address(a.bind_address, ec);
+  if (ec) m.fail("bind_address", "must be an IPv4 or IPv6 address, got '" + a.bind_address + "'");
+  readPort(m, "port", a.port, 0);
+  readCount(m, "max_frame_bytes", s.dispatch.max_frame_bytes, lim::kMaxFrameBytes);
+  readCount(m, "map_blocks_per_chunk", s.dispatch.map_blocks_per_chunk, lim::kMapBlocksPerChunk);
+  readCount(m, "cloud_points_per_chunk", s.dispatch.cloud_points_per_chunk, lim::kCloudPointsPerChunk);
+  readCount(m, "max_clients", s.max_clients, lim::kMaxClients);
+  readCount(m, "max_clients_per_peer", s.max_clients_per_peer, lim::kMaxClientsPerPeer);
+  readCount(m, "max_in_flight", s.max_in_flight, lim::kMaxInFlight);
+  m.number("max_requests_per_s", s.max_requests_per_s, lim::kMaxRequestsPerS.min, lim::kMaxRequestsPerS.max);
+  m.number("request_burst", s.request_burst, lim::kRequestBurst.min, lim::kRequestBurst.max);
+  readCount(m, "max_queued_responses", s.max_queued_responses, lim::kMaxQueuedResponses);
+  readCount(m, "max_queued_waypoints", s.max_queued_waypoints, lim::kMaxQueuedWaypoints);
+  readCount(m, "max_queued_bytes", s.max_queued_bytes, lim::kMaxQueuedBytes);
+  readInt(m, "socket_send_buffer_bytes", s.socket_send_buffer_bytes, lim::kSocketSendBufferBytes);
+  readMillis(m, "close_timeout_ms", s.close_timeout, lim::kCloseTimeoutMs);
+  readMillis(m, "hello_timeout_ms", s.hello_timeout, lim::kHelloTimeoutMs);
+  readMillis(m, "idle_timeout_ms", s.idle_timeout, lim::kIdleTimeoutMs);
+  readMillis(m, "write_timeout_ms", s.write_timeout, lim::kWriteTimeoutMs);
+  std::string secret;
+  m.text("secret_file", secret);
+  if (!secret.empty()) {
+    a.secret_file = base_dir / secret;
+    if (auto read = readSecretFile(a.secret_file); !read) m.fail("secret_file", read.error().message);
+  }
+  ConfigMap tls = m.map("tls");
+  std::string certificate, key;
+  tls.text("certificate_file", certificate);
+  tls.text("private_key_file", key);
+  if (certificate.empty() != key.empty())
+    tls.fail(certificate.empty() ? "certificate_file" : "private_key_file",
+             "give both certificate_file and private_key_file, or neither");
+  if (!certificate.empty()) s.tls.certificate_chain_file = base_dir / certificate;
+  if (!key.empty()) s.tls.private_key_file = base_dir / key;
+  readMillis(tls, "handshake_timeout_ms", s.tls.handshake_timeout, lim::kTlsHandshakeTimeoutMs);
+  tls.finish();
+  m.finish();
+
+  // A frame too small for the chunk sizes is the frame size's fault when the file sets it.
+  if (m.has("max_frame_bytes") && !s.dispatch.validate().ok()) {
+    if (const auto min = minFrameBytes(s.dispatch))
+      m.fail("max_frame_bytes", "must be in [" + std::to_string(*min) + ", " + std::to_string(lim::kMaxFrameBytes.max) +
+                                    "] for map_blocks_per_chunk " + std::to_string(s.dispatch.map_blocks_per_chunk) +
+                                    " and cloud_points_per_chunk " + std::to_string(s.dispatch.cloud_points_per_chunk) +
+                                    ", got " + std::to_string(s.dispatch.max_frame_bytes));
+  }
+  if (Status st = s.validate(); !st.ok()) failAtNamedKey(root, "api", st.error().message);
+  if (s.tls.enabled()) {
+    if (auto context = api::makeTlsContext(s.tls); !context) failAtNamedKey(root, "api", context.error().message);
+  }
+}
+
 template <class T>
 Status named(const char* section, const T& config) {
   Status s = config.validate();
@@ -247,14 +372,23 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
     mission.fail("name", "must be a plain folder name");
   mission.boolean("start_on_launch", c.mission.start_on_launch);
   mission.integer("max_submaps", c.mission.max_submaps, 1, 100000);
+  mission.unsignedInteger("raw_log_max_bytes", c.mission.raw_log_max_bytes, std::uint64_t{1} << 20,
+                          std::uint64_t{1} << 50);
   if ((c.mission.box_max_m.array() <= c.mission.box_min_m.array()).any())
     mission.fail("box_max_m", "must exceed box_min_m on every axis");
   mission.finish();
+
+  c.mission.directory_setting = mission.has("directory") ? mission.location("directory") + ": mission.directory"
+                                : mission.has("name")    ? mission.location("name") + ": mission.name"
+                                                         : source_name + ": mission.directory (default)";
 
   ConfigMap sim = root.map("sim");
   std::string scene;
   sim.text("scene", scene, c.source == Source::kSim);
   if (!scene.empty()) c.sim.scene = base_dir / scene;
+  if (c.source == Source::kSim && !scene.empty()) {
+    if (auto read = yaml::readText(c.sim.scene, "scene"); !read) sim.fail("scene", read.error().message);
+  }
   sim.unsignedInteger("seed", c.sim.seed, 0, std::numeric_limits<std::uint64_t>::max());
   sim.number("speedup", c.sim.speedup, 0.0, 1e6);
   sim.number("odometry_noise_scale", c.sim.odometry_noise_scale, 0.0, 1e3);
@@ -269,27 +403,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   readNav(root.map("nav"), c.nav);
   readDevices(root.map("devices"), c.devices);
 
-  ConfigMap api = root.map("api");
-  api.text("bind_address", c.api.bind_address);
-  readPort(api, "port", c.api.port, 0);
-  std::uint64_t max_frame = c.api.max_frame_bytes;
-  api.unsignedInteger("max_frame_bytes", max_frame, 1024, 256u << 20);
-  c.api.max_frame_bytes = static_cast<std::uint32_t>(max_frame);
-  api.integer("max_clients", c.api.max_clients, 1, 10'000);
-  std::string secret;
-  api.text("secret_file", secret);
-  if (!secret.empty()) c.api.secret_file = base_dir / secret;
-  ConfigMap tls = api.map("tls");
-  std::string certificate, key;
-  tls.text("certificate_file", certificate);
-  tls.text("private_key_file", key);
-  if (certificate.empty() != key.empty())
-    tls.fail(certificate.empty() ? "certificate_file" : "private_key_file",
-             "give both certificate_file and private_key_file, or neither");
-  if (!certificate.empty()) c.api.tls_certificate_file = base_dir / certificate;
-  if (!key.empty()) c.api.tls_private_key_file = base_dir / key;
-  tls.finish();
-  api.finish();
+  readApi(root, c.api, base_dir);
   ConfigMap log = root.map("log");
   log.choice("level", c.log_level, {"debug", "info", "warning", "error"});
   log.finish();
@@ -332,6 +446,61 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
     if (!s.ok()) return Error{source_name + ": " + s.error().message};
   }
   return c;
+}
+
+Result<std::string> readSecretFile(const std::filesystem::path& file) {
+  const api::Range<std::uint64_t> size = api::limits::kSecretFileBytes;
+  const std::string allowed =
+      "(a secret has " + std::to_string(size.min) + " to " + std::to_string(size.max) + " bytes)";
+  // O_NONBLOCK: a FIFO named by mistake must not hang the start.
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+  if (fd < 0) return Error{errnoText("cannot open " + file.string())};
+  const struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) return Error{errnoText("cannot stat " + file.string())};
+  if (S_ISDIR(st.st_mode)) return Error{file.string() + " is a directory, not a file " + allowed};
+  if (!S_ISREG(st.st_mode)) return Error{file.string() + " is not a regular file " + allowed};
+  std::string secret(size.max + 3, '\0');  // the largest secret, a trailing CR LF, and one more byte
+  const ssize_t n = ::read(fd, secret.data(), secret.size());
+  if (n < 0) return Error{errnoText("cannot read " + file.string())};
+  secret.resize(static_cast<std::size_t>(n));
+  while (!secret.empty() && (secret.back() == '\n' || secret.back() == '\r')) secret.pop_back();
+  if (secret.size() < size.min)
+    return Error{file.string() + " holds " + std::to_string(secret.size()) + " bytes, fewer than " +
+                 std::to_string(size.min) + " bytes " + allowed};
+  if (secret.size() > size.max) return Error{file.string() + " holds too many bytes " + allowed};
+  if ((st.st_mode & (S_IRWXG | S_IRWXO)) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof(mode), "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    return Error{file.string() + " has mode " + mode + ", accessible by group or others; chmod 600 " + file.string()};
+  }
+  return secret;
+}
+
+Status checkMissionDirectory(const std::filesystem::path& dir, const std::string& setting) {
+  namespace fs = std::filesystem;
+  const std::string where = setting + ": " + dir.string();
+  // The folder itself when it exists, else its nearest existing ancestor (where vogd would create it).
+  fs::path existing = dir.empty() ? fs::path(".") : dir;
+  std::error_code ec;
+  while (!fs::exists(existing, ec)) {
+    if (ec) return Error{where + ": cannot inspect " + existing.string() + ": " + ec.message()};
+    fs::path parent = existing.parent_path();
+    if (parent.empty()) parent = ".";
+    if (parent == existing) return Error{where + ": no folder of it exists"};
+    existing = parent;
+  }
+  if (!fs::is_directory(existing, ec)) return Error{where + ": " + existing.string() + " is not a directory"};
+  // Writing is what vogd will do there; mode bits alone do not tell (root, read-only mounts).
+  std::string probe = (existing / ".vogd-check-XXXXXX").string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) return Error{errnoText(where + ": cannot write in " + existing.string())};
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return {};
 }
 
 Result<VogdConfig> loadVogdConfig(const std::filesystem::path& file) {

@@ -1,6 +1,7 @@
 // vogd: the VOG mapping-and-planning daemon.
 //   vogd --config F                     run (until SIGTERM/SIGINT)
-//   vogd --config F --check-config      validate the configuration and exit (systemd ExecStartPre)
+//   vogd --config F --check-config      check the configuration, the files it names and the mission
+//                                       folder as vogd would use them, and exit (systemd ExecStartPre)
 //   vogd --config F --replay DIR --out OUT   re-run a recorded mission's mapping offline
 // Exit codes: 0 ok, 1 stopped by an error, 2 bad configuration or arguments.
 #include "vog/app/daemon.hpp"
@@ -46,7 +47,8 @@ int main(int argc, char** argv) {
   std::string replay_dir, out_dir, mission_dir, port_file;
   CLI::App app{"vogd: VOG mapping and planning daemon"};
   app.add_option("--config", config_file, "configuration file (config/vogd.yaml documents every key)");
-  app.add_flag("--check-config", check_only, "validate the configuration and exit");
+  app.add_flag("--check-config", check_only,
+               "check the configuration, the files it names and the mission folder, and exit");
   app.add_option("--mission-dir", mission_dir, "mission folder (default: mission.directory/mission.name)");
   app.add_option("--port-file", port_file, "write the API port here once listening (api.port 0 picks one)");
   auto* replay = app.add_option("--replay", replay_dir, "re-run the mapping of a recorded mission folder offline");
@@ -60,6 +62,15 @@ int main(int argc, char** argv) {
   }
   setupLogging(config->log_level);
   if (check_only) {
+    // The folder vogd would open (Daemon::init); the files the configuration names were checked above.
+    const vog::Status dir = mission_dir.empty()
+                                ? vog::app::checkMissionDirectory(config->mission.directory / config->mission.name,
+                                                                  config->mission.directory_setting)
+                                : vog::app::checkMissionDirectory(mission_dir, "--mission-dir");
+    if (!dir.ok()) {
+      spdlog::error("{}", dir.error().message);
+      return 2;
+    }
     spdlog::info("{}: configuration ok ({} source)", config_file,
                  config->source == vog::app::Source::kSim ? "simulator" : "device");
     return 0;

@@ -1,5 +1,7 @@
 #include "vog/map/local_grid.hpp"
 
+#include "vog/core/atomic_file.hpp"
+
 #include <nanoflann.hpp>
 #include <octomap/OcTree.h>
 
@@ -7,6 +9,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <sstream>
 #include <unordered_map>
 
 namespace vog::map {
@@ -78,9 +81,16 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, con
   return fromTree(config, std::unique_ptr<octomap::OcTree>(tree));
 }
 
+Result<std::string> LocalGrid::serialize() const {
+  std::ostringstream out(std::ios_base::out | std::ios_base::binary);
+  if (!tree_->write(out) || !out.good()) return Error{"cannot serialise the OcTree of a local grid"};
+  return std::move(out).str();
+}
+
 Status LocalGrid::save(const std::filesystem::path& ot_file) const {
-  if (!tree_->write(ot_file.string())) return Error{"cannot write " + ot_file.string()};
-  return {};
+  auto bytes = serialize();
+  if (!bytes) return bytes.error();
+  return writeFileAtomically(ot_file, *bytes);
 }
 
 Status LocalGrid::insertScan(const geometry::Pose3& T_grid_sensor, const geometry::SonarFan& fan,

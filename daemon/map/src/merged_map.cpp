@@ -263,6 +263,7 @@ std::vector<std::pair<VoxelKey, std::shared_ptr<const MergedMap::Block>>> Merged
 
 std::vector<VoxelKey> MergedMap::blocksRemovedSince(std::uint64_t since_version) const {
   std::vector<VoxelKey> out;
+  if (since_version == 0) return out;  // the map at version 0 is empty: nothing of it can have gone
   for (const auto& [packed, version] : removed_) {
     if (version > since_version) out.push_back(unpackBlock(packed) * kBlockSide);
   }

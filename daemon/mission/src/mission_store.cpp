@@ -179,17 +179,77 @@ std::int64_t MissionStore::nextSubmapIndex() const {
   return next_index_;
 }
 
-Status MissionStore::appendLocked(const JournalRecord& record) {
-  if (Status s = journal_->append(record); !s.ok()) {
-    failed_ = s.error();
-    return s;
+void MissionStore::queueLocked(PendingWrite write) {
+  const bool waypoint = write.records.size() == 1 && std::holds_alternative<WaypointRecord>(write.records.front());
+  if (waypoint && !pending_.empty() && pending_.back().records.size() == 1 &&
+      std::holds_alternative<WaypointRecord>(pending_.back().records.front())) {
+    pending_.back() = std::move(write);  // only the newest waypoint matters on resume
+  } else {
+    pending_.push_back(std::move(write));
   }
-  return Status::success();
+  flushLocked();
+}
+
+void MissionStore::flushLocked() {
+  if (journal_failed_) {
+    if (Status s = journal_->rollback(written_bytes_); !s.ok()) {
+      fault_ = s.error();
+      return;
+    }
+    journal_failed_ = false;
+  }
+  while (!pending_.empty()) {
+    PendingWrite& w = pending_.front();
+    if (w.grid) {
+      auto& record = std::get<SubmapClosedRecord>(w.records.front());
+      auto file = submaps_.write(record.index, *w.grid);
+      if (!file) {
+        fault_ = file.error();
+        return;
+      }
+      record.ot_file = file->file_name;
+      record.ot_size_bytes = file->size_bytes;
+      record.ot_crc32c = file->crc32c;
+      w.grid.reset();
+    }
+    Status s = Status::success();
+    for (std::size_t i = 0; i < w.records.size() && s.ok(); ++i) s = journal_->append(w.records[i]);
+    if (s.ok() && w.sync) s = journal_->sync();
+    if (!s.ok()) {
+      // Nothing of this item stays in the journal: the next attempt rolls back to written_bytes_.
+      journal_failed_ = true;
+      fault_ = Error{"mission store: journal: " + s.error().message};
+      return;
+    }
+    written_bytes_ = journal_->sizeBytes();
+    pending_.pop_front();
+  }
+  fault_.reset();
+}
+
+StorageHealth MissionStore::healthLocked() const {
+  StorageHealth h;
+  if (!pending_.empty() || journal_failed_) h.fault = fault_;
+  for (const PendingWrite& w : pending_) {
+    const bool submap = std::holds_alternative<SubmapClosedRecord>(w.records.front());
+    (submap ? h.pending_submaps : h.pending_records) += 1;
+  }
+  return h;
+}
+
+StorageHealth MissionStore::retryPending() {
+  std::lock_guard lock(mutex_);
+  flushLocked();
+  return healthLocked();
+}
+
+StorageHealth MissionStore::health() const {
+  std::lock_guard lock(mutex_);
+  return healthLocked();
 }
 
 Status MissionStore::onSubmapClosed(const slam::ClosedSubmap& closed) {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
   if (!staged_.empty()) {
     return Error{"mission store: submap " + std::to_string(closed.index) +
                  " closed before the previous one was committed"};
@@ -201,15 +261,13 @@ Status MissionStore::onSubmapClosed(const slam::ClosedSubmap& closed) {
   if (!closed.grid || !closed.grid->finalized()) {
     return Error{"mission store: submap " + std::to_string(closed.index) + " has no finalized grid"};
   }
-  auto file = submaps_.write(closed.index, *closed.grid);
-  if (!file) return Error{"mission store: " + file.error().message};
-  staged_.push_back(toRecord(closed, file.value()));
+  staged_.push_back(toRecord(closed, StoredSubmapFile{SubmapStore::fileName(closed.index), 0, 0}));
+  staged_grid_ = closed.grid;
   return Status::success();
 }
 
 Status MissionStore::onClosures(const std::vector<slam::LoopClosure>& closures) {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
   if (staged_.empty() && !closures.empty()) return Error{"mission store: loop closures outside a submap group"};
   for (const slam::LoopClosure& lc : closures) {
     if (lc.to != next_index_ || lc.from < 0 || lc.from >= lc.to) {
@@ -225,25 +283,19 @@ Status MissionStore::onClosures(const std::vector<slam::LoopClosure>& closures) 
 
 Status MissionStore::onOptimized(const std::vector<std::pair<slam::NodeId, slam::Vector6d>>& estimates) {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
   const std::int64_t n_nodes = next_index_ + (staged_.empty() ? 0 : 1);
   for (const auto& [id, x] : estimates) {
     if (id < 0 || id >= n_nodes || !x.allFinite()) {
       staged_.clear();
+      staged_grid_.reset();
       return Error{"mission store: estimate of node " + std::to_string(id) + " is unknown or not finite"};
     }
   }
   staged_.push_back(OptimizedPosesRecord{estimates});
-  const bool new_submap = staged_.size() > 1 || std::holds_alternative<SubmapClosedRecord>(staged_.front());
-  for (const JournalRecord& r : staged_) {
-    if (Status s = appendLocked(r); !s.ok()) return s;
-  }
+  if (std::holds_alternative<SubmapClosedRecord>(staged_.front())) ++next_index_;
+  queueLocked(PendingWrite{std::move(staged_grid_), std::move(staged_), true});
   staged_.clear();
-  if (Status s = journal_->sync(); !s.ok()) {
-    failed_ = s.error();
-    return s;
-  }
-  if (new_submap) ++next_index_;
+  staged_grid_.reset();
   return Status::success();
 }
 
@@ -268,30 +320,27 @@ Status MissionStore::onUpdate(const slam::MappingPipeline& pipeline, const slam:
 
 Status MissionStore::onWaypoint(const WaypointRecord& waypoint) {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
   if (!Eigen::Vector4d(waypoint.x_m, waypoint.y_m, waypoint.z_m, waypoint.yaw_rad).allFinite()) {
     return Error{"mission store: waypoint at stamp_ns " + std::to_string(waypoint.stamp_ns) + " is not finite"};
   }
-  return appendLocked(waypoint);
+  queueLocked(PendingWrite{nullptr, {waypoint}, false});
+  return Status::success();
 }
 
 Status MissionStore::onState(const MissionStateRecord& state) {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
-  if (Status s = appendLocked(state); !s.ok()) return s;
-  if (Status s = journal_->sync(); !s.ok()) {
-    failed_ = s.error();
-    return s;
-  }
+  queueLocked(PendingWrite{nullptr, {state}, true});
   return Status::success();
 }
 
 Status MissionStore::sync() {
   std::lock_guard lock(mutex_);
-  if (failed_) return Error{"mission store unusable after an earlier error: " + failed_->message};
+  flushLocked();
+  if (!pending_.empty() || journal_failed_) return *fault_;
   if (Status s = journal_->sync(); !s.ok()) {
-    failed_ = s.error();
-    return s;
+    journal_failed_ = true;
+    fault_ = Error{"mission store: journal: " + s.error().message};
+    return *fault_;
   }
   return Status::success();
 }

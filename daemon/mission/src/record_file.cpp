@@ -113,19 +113,37 @@ Result<std::unique_ptr<RecordWriter>> RecordWriter::open(const std::filesystem::
     const std::filesystem::path parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
     if (Status s = syncDirectory(parent); !s.ok()) return close_with(s.error());
   }
-  std::FILE* file = ::fdopen(fd, "a");
-  if (file == nullptr) return close_with(Error{"cannot fdopen " + path.string() + ": " + errnoText()});
-  auto writer = std::unique_ptr<RecordWriter>(new RecordWriter(path, file, scan->good_end));
-  std::setvbuf(file, writer->stdio_buffer_.data(), _IOFBF, writer->stdio_buffer_.size());
+  const std::uint64_t good_end = scan->good_end;
   if (existing != nullptr) *existing = std::move(scan.value());
-  return writer;
+  return std::unique_ptr<RecordWriter>(new RecordWriter(path, fd, good_end));
 }
 
-RecordWriter::~RecordWriter() { std::fclose(file_); }
+RecordWriter::~RecordWriter() {
+  if (!failed_) (void)writeBuffer(buffer_.size());
+  ::close(fd_);
+}
 
 Status RecordWriter::fail(const std::string& what) {
   failed_ = Error{what + " " + path_.string() + ": " + errnoText()};
   return *failed_;
+}
+
+Status RecordWriter::writeBuffer(std::size_t bytes) {
+  std::size_t done = 0;
+  while (done < bytes) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, bytes - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = EIO;
+      buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(done));
+      file_bytes_ += done;
+      return fail("cannot write");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  file_bytes_ += done;
+  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(done));
+  return Status::success();
 }
 
 Status RecordWriter::append(std::span<const std::uint8_t> payload) {
@@ -135,15 +153,17 @@ Status RecordWriter::append(std::span<const std::uint8_t> payload) {
                  std::to_string(kMaxRecordPayloadBytes)};
   }
   const std::vector<std::uint8_t> frame = encodeFrame(payload);
-  if (std::fwrite(frame.data(), 1, frame.size(), file_) != frame.size()) return fail("cannot write");
+  buffer_.insert(buffer_.end(), frame.begin(), frame.end());
   size_bytes_ += frame.size();
+  // Whole buffers, as stdio writes them: a frame may be split until sync().
+  if (buffer_.size() >= kBufferBytes) return writeBuffer(buffer_.size() / kBufferBytes * kBufferBytes);
   return Status::success();
 }
 
 Status RecordWriter::sync() {
   if (failed_) return Error{"record file unusable after an earlier error: " + failed_->message};
-  if (std::fflush(file_) != 0) return fail("cannot flush");
-  if (::fsync(::fileno(file_)) != 0) return fail("cannot fsync");
+  if (Status s = writeBuffer(buffer_.size()); !s.ok()) return s;
+  if (::fsync(fd_) != 0) return fail("cannot fsync");
   return Status::success();
 }
 
@@ -153,10 +173,30 @@ Status RecordWriter::truncate(std::uint64_t size_bytes) {
     return Error{"cannot truncate " + path_.string() + " to " + std::to_string(size_bytes) + " bytes: it holds " +
                  std::to_string(size_bytes_)};
   }
-  if (std::fflush(file_) != 0) return fail("cannot flush");
-  if (::ftruncate(::fileno(file_), static_cast<off_t>(size_bytes)) != 0) return fail("cannot truncate");
-  if (::fsync(::fileno(file_)) != 0) return fail("cannot fsync");
+  if (Status s = writeBuffer(buffer_.size()); !s.ok()) return s;
+  if (::ftruncate(fd_, static_cast<off_t>(size_bytes)) != 0) return fail("cannot truncate");
+  if (::fsync(fd_) != 0) return fail("cannot fsync");
+  size_bytes_ = file_bytes_ = size_bytes;
+  return Status::success();
+}
+
+Status RecordWriter::rollback(std::uint64_t size_bytes) {
+  if (size_bytes > size_bytes_) {
+    return Error{"cannot roll " + path_.string() + " back to " + std::to_string(size_bytes) + " bytes: it holds " +
+                 std::to_string(size_bytes_)};
+  }
+  if (size_bytes >= file_bytes_) {
+    buffer_.resize(static_cast<std::size_t>(size_bytes - file_bytes_));
+  } else {
+    if (::ftruncate(fd_, static_cast<off_t>(size_bytes)) != 0) {
+      failed_ = Error{"cannot truncate " + path_.string() + ": " + errnoText()};
+      return *failed_;
+    }
+    buffer_.clear();
+    file_bytes_ = size_bytes;
+  }
   size_bytes_ = size_bytes;
+  failed_.reset();
   return Status::success();
 }
 

@@ -53,22 +53,30 @@ std::string SubmapStore::fileName(std::int64_t index) {
 
 Result<StoredSubmapFile> SubmapStore::write(std::int64_t index, const map::LocalGrid& grid) const {
   if (index < 0) return Error{"submap store: negative submap index " + std::to_string(index)};
-  const std::string name = fileName(index);
-  const std::filesystem::path final_path = dir_ / name;
-  StoredSubmapFile sum;
-  Status written = writeFileAtomically(final_path, [&](const std::filesystem::path& tmp_path) -> Status {
-    if (Status s = grid.save(tmp_path); !s.ok()) return s;
-    const int fd = ::open(tmp_path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return Error{"cannot reopen " + tmp_path.string() + ": " + errnoText()};
-    auto checked = checksum(fd, tmp_path);
-    ::close(fd);
-    if (!checked) return checked.error();
-    sum = checked.value();
-    return Status::success();
-  });
-  if (!written.ok()) return Error{"submap store: " + written.error().message};
-  sum.file_name = name;
-  return sum;
+  auto bytes = grid.serialize();
+  if (!bytes) return Error{"submap store: submap " + std::to_string(index) + ": " + bytes.error().message};
+  // Size and CRC of what was meant to be written; the file is read back against them, so a write that
+  // was lost or cut short on the way is an error here, never a journal record naming a bad file.
+  StoredSubmapFile file{fileName(index), bytes->size(),
+                        crc32c(std::span(reinterpret_cast<const std::uint8_t*>(bytes->data()), bytes->size()))};
+  if (Status s = writeFileAtomically(dir_ / file.file_name, *bytes); !s.ok())
+    return Error{"submap store: " + s.error().message};
+  if (Status s = verify(dir_ / file.file_name, file); !s.ok()) return s.error();
+  return file;
+}
+
+Status SubmapStore::verify(const std::filesystem::path& path, const StoredSubmapFile& file) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Error{"submap store: cannot open submap file " + path.string() + ": " + errnoText()};
+  auto sum = checksum(fd, path);
+  ::close(fd);
+  if (!sum) return Error{"submap store: " + sum.error().message};
+  if (sum->size_bytes != file.size_bytes || sum->crc32c != file.crc32c) {
+    return Error{"submap store: submap file " + path.string() + " is corrupt: " + std::to_string(sum->size_bytes) +
+                 " bytes with CRC-32C " + std::to_string(sum->crc32c) + ", expected " +
+                 std::to_string(file.size_bytes) + " bytes with CRC-32C " + std::to_string(file.crc32c)};
+  }
+  return Status::success();
 }
 
 Result<std::shared_ptr<const map::LocalGrid>> SubmapStore::read(const map::GridConfig& grid_config,
@@ -79,16 +87,7 @@ Result<std::shared_ptr<const map::LocalGrid>> SubmapStore::read(const map::GridC
     return Error{"submap store: '" + file.file_name + "' is not a plain file name"};
   }
   const std::filesystem::path path = dir_ / name;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Error{"submap store: cannot open submap file " + path.string() + ": " + errnoText()};
-  auto sum = checksum(fd, path);
-  ::close(fd);
-  if (!sum) return Error{"submap store: " + sum.error().message};
-  if (sum->size_bytes != file.size_bytes || sum->crc32c != file.crc32c) {
-    return Error{"submap store: submap file " + path.string() + " is corrupt: " + std::to_string(sum->size_bytes) +
-                 " bytes with CRC-32C " + std::to_string(sum->crc32c) + ", the journal recorded " +
-                 std::to_string(file.size_bytes) + " bytes with CRC-32C " + std::to_string(file.crc32c)};
-  }
+  if (Status s = verify(path, file); !s.ok()) return s.error();
   auto grid = map::LocalGrid::load(grid_config, path);
   if (!grid) return Error{"submap store: " + grid.error().message};
   return std::shared_ptr<const map::LocalGrid>(std::move(grid.value()));

@@ -13,7 +13,9 @@
 
 #include <sys/wait.h>
 
+#include <condition_variable>
 #include <cstdio>
+#include <mutex>
 #include <thread>
 
 namespace vog::api {
@@ -23,6 +25,7 @@ using namespace std::chrono_literals;
 using client::ApiClient;
 using test::expectMirrorEquals;
 using test::kOperatorSecret;
+using tcp = asio::ip::tcp;
 
 ApiServerConfig defaultConfig() {
   ApiServerConfig c;
@@ -438,25 +441,41 @@ TEST_F(ApiServerTest, PoseAndStatusStreamsFollowSubscriptions) {
   EXPECT_FALSE(c->nextStream(200ms).ok());
 }
 
-TEST_F(ApiServerTest, ClientLimitRefusesTheExtraClientOnly) {
+TEST_F(ApiServerTest, AFullServerEvictsTheMostIdleObserverAndRefusesOnlyWhenAllAreOperators) {
   ApiServerConfig config = defaultConfig();
   config.max_clients = 2;
   start(config);
   auto a = connect();
   auto b = connect();
   ASSERT_TRUE(a && b);
-  ASSERT_TRUE(a->status().ok() && b->status().ok());
-  auto extra = connect();
-  ASSERT_TRUE(extra);
-  const auto err = extra->receive(5s);
+  ASSERT_TRUE(a->status().ok());
+  ASSERT_TRUE(b->status().ok());  // b asked last: a is the most idle
+  auto c = connect();
+  ASSERT_TRUE(c);
+  EXPECT_TRUE(c->status().ok());
+  const auto err = a->receive(5s);
   ASSERT_TRUE(err.ok());
   ASSERT_TRUE(err->has_error());
   EXPECT_EQ(err->error().code(), v1::ERROR_CODE_TOO_MANY_CLIENTS);
+  EXPECT_NE(err->error().message().find("api.max_clients"), std::string::npos) << err->error().message();
+  EXPECT_TRUE(closedByServer(*a));
+  EXPECT_TRUE(b->status().ok());
+  EXPECT_EQ(server_->stats().evicted, 1u);
+
+  // Operators are never evicted: with both slots held by operators the newcomer is refused.
+  ASSERT_EQ(b->authenticate(kOperatorSecret).value(), Role::kOperator);
+  ASSERT_EQ(c->authenticate(kOperatorSecret).value(), Role::kOperator);
+  auto extra = connect();
+  ASSERT_TRUE(extra);
+  const auto refused = extra->receive(5s);
+  ASSERT_TRUE(refused.ok());
+  ASSERT_TRUE(refused->has_error());
+  EXPECT_EQ(refused->error().code(), v1::ERROR_CODE_TOO_MANY_CLIENTS);
   EXPECT_TRUE(closedByServer(*extra));
-  EXPECT_TRUE(a->status().ok() && b->status().ok());
+  EXPECT_TRUE(b->status().ok() && c->status().ok());
   EXPECT_EQ(server_->stats().refused_full, 1u);
   // A slot frees when a client leaves.
-  b.reset();
+  c.reset();
   ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.clients == 1; }));
   auto again = connect();
   ASSERT_TRUE(again);
@@ -496,22 +515,27 @@ TEST_F(ApiServerTest, RateAndInFlightLimitsRefuseRequestsWithAnError) {
   EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_RATE_LIMITED), 7);
 }
 
-TEST_F(ApiServerTest, InFlightLimitAndUnreadResponsesDisconnectOnlyTheFlooder) {
+TEST_F(ApiServerTest, InFlightLimitAndAReaderThatNeverReadsDisconnectOnlyTheFlooder) {
   ApiServerConfig config = defaultConfig();
   config.max_in_flight = 3;
   config.max_queued_responses = 8;
+  config.socket_send_buffer_bytes = 4096;
+  config.write_timeout = 300ms;
   start(config);
+  client::ClientConfig flooder_config;
+  flooder_config.socket_receive_buffer_bytes = 4096;
   auto polite = connect();
-  auto flooder = connect();
+  auto flooder = connect(flooder_config);
   ASSERT_TRUE(polite && flooder);
   // Six requests in one segment: three answered, three refused as in flight.
   const auto codes = pipelined(*flooder, 6);
   ASSERT_EQ(codes.size(), 6u);
   EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_UNSPECIFIED), 3);
   EXPECT_EQ(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_TOO_MANY_IN_FLIGHT), 3);
-  // Forty in one write, never read: more than eight responses pile up and the flooder is dropped.
+  // Thousands in one write, never read: the replies fill both socket buffers, the server stops
+  // reading the flooder's requests, and with no write progress for write_timeout it disconnects it.
   std::string bytes;
-  for (int i = 1; i <= 40; ++i) {
+  for (int i = 1; i <= 5000; ++i) {
     v1::Envelope e;
     e.set_request_id(static_cast<std::uint64_t>(i));
     e.mutable_get_status();
@@ -519,9 +543,150 @@ TEST_F(ApiServerTest, InFlightLimitAndUnreadResponsesDisconnectOnlyTheFlooder) {
   }
   ASSERT_TRUE(flooder->sendRaw(bytes).ok());
   ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.slow_disconnects == 1; }));
-  EXPECT_TRUE(closedByServer(*flooder));
   EXPECT_TRUE(polite->status().ok());
-  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "cannot keep up"));
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "a client that does not read"));
+  EXPECT_LE(server_->stats().max_session_queued_bytes, config.max_queued_bytes);
+  EXPECT_TRUE(eventually([](const ApiServerStats& s) { return s.clients == 1 && s.queued_bytes == 0; }));
+}
+
+// More pipelined requests than any queue holds, in one write, from a client that reads: every one
+// is answered (run, or refused with its id), in order, and the connection stays open.
+TEST_F(ApiServerTest, ABurstOfPipelinedRequestsGetsOneReplyEach) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  constexpr int kN = 2000;
+  const auto codes = pipelined(*c, kN);
+  ASSERT_EQ(codes.size(), static_cast<std::size_t>(kN));
+  for (const v1::ErrorCode code : codes) {
+    EXPECT_TRUE(code == v1::ERROR_CODE_UNSPECIFIED || code == v1::ERROR_CODE_TOO_MANY_IN_FLIGHT ||
+                code == v1::ERROR_CODE_RATE_LIMITED)
+        << code;
+  }
+  EXPECT_GE(std::count(codes.begin(), codes.end(), v1::ERROR_CODE_UNSPECIFIED), 16);
+  EXPECT_FALSE(c->broken());
+  EXPECT_EQ(server_->stats().slow_disconnects, 0u);
+  EXPECT_EQ(server_->stats().clients, 1u);
+  // Still open: a later request is answered (the bucket has refilled a little by now, or it is
+  // refused as rate limited: either way with its id).
+  v1::Envelope e;
+  e.mutable_get_status();
+  const std::uint64_t id = c->send(e).value();
+  const auto reply = c->receive(5s);
+  ASSERT_TRUE(reply.ok()) << reply.error().message;
+  EXPECT_EQ(reply->request_id(), id);
+}
+
+// Observers that ask for the whole map again and again and never read: each one's queue stays
+// within its byte budget (nothing is encoded ahead), others are answered promptly, and the write
+// timeout disconnects the stalled readers.
+TEST_F(ApiServerTest, MapRequestsThatAreNeverReadStayWithinTheBudgetAndTimeOut) {
+  ApiServerConfig config = defaultConfig();
+  config.dispatch.max_frame_bytes = 64u << 10;
+  config.dispatch.map_blocks_per_chunk = 4;
+  config.dispatch.cloud_points_per_chunk = 2048;
+  config.max_queued_bytes = 128u << 10;
+  config.socket_send_buffer_bytes = 4096;
+  config.write_timeout = 500ms;
+  ASSERT_TRUE(config.validate().ok()) << config.validate().error().message;
+  start(config);
+  const auto snapshot = backend_.mapSnapshot();
+  // One whole map alone is more than the budget (16 requests per client, several clients).
+  ASSERT_GT(snapshot->blockCount() * 2000, config.max_queued_bytes) << "the map is too small";
+
+  constexpr int kObservers = 4;
+  client::ClientConfig stalled_config;
+  stalled_config.socket_receive_buffer_bytes = 4096;
+  std::vector<std::unique_ptr<ApiClient>> stalled;
+  for (int i = 0; i < kObservers; ++i) {
+    stalled.push_back(connect(stalled_config));
+    ASSERT_TRUE(stalled.back());
+    std::string bytes;
+    for (int r = 1; r <= 16; ++r) {
+      v1::Envelope e;
+      e.set_request_id(static_cast<std::uint64_t>(r));
+      e.mutable_get_map()->set_since_version(0);
+      bytes += encodeFrame(e).value();
+    }
+    ASSERT_TRUE(stalled.back()->sendRaw(bytes).ok());
+  }
+  auto other = connect();
+  ASSERT_TRUE(other);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(other->status().ok());
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.slow_disconnects == kObservers; }))
+      << server_->stats().slow_disconnects;
+  const ApiServerStats s = server_->stats();
+  EXPECT_GT(s.max_session_queued_bytes, 0u);
+  EXPECT_LE(s.max_session_queued_bytes, config.max_queued_bytes);
+  EXPECT_TRUE(eventually([](const ApiServerStats& st) { return st.clients == 1 && st.queued_bytes == 0; }));
+  EXPECT_TRUE(other->status().ok());
+  // A reader that reads still gets the whole map through the same budget.
+  MapMirror mirror;
+  ASSERT_TRUE(other->fetchMap(mirror).ok());
+  expectMirrorEquals(mirror, *snapshot);
+}
+
+TEST_F(ApiServerTest, ConnectionsWithoutARequestAndIdleOnesAreClosedSubscribedOnesStay) {
+  ApiServerConfig config = defaultConfig();
+  config.hello_timeout = 200ms;
+  config.idle_timeout = 1000ms;
+  start(config);
+  auto silent = connect();
+  auto idle = connect();
+  auto watcher = connect();
+  ASSERT_TRUE(silent && idle && watcher);
+  ASSERT_TRUE(idle->status().ok());
+  ASSERT_TRUE(watcher->subscribe({true, false, false}).ok());
+  // The silent connection gets an Error naming the setting, then is closed.
+  const auto silent_err = silent->receive(5s);
+  ASSERT_TRUE(silent_err.ok()) << silent_err.error().message;
+  ASSERT_TRUE(silent_err->has_error());
+  EXPECT_EQ(silent_err->error().code(), v1::ERROR_CODE_TIMED_OUT);
+  EXPECT_NE(silent_err->error().message().find("api.hello_timeout_ms"), std::string::npos)
+      << silent_err->error().message();
+  EXPECT_TRUE(closedByServer(*silent));
+  EXPECT_EQ(server_->stats().hello_timeouts, 1u);
+  // The idle one goes after idle_timeout with an Error naming the setting; the subscribed one stays.
+  const auto err = idle->receive(5s);
+  ASSERT_TRUE(err.ok());
+  ASSERT_TRUE(err->has_error());
+  EXPECT_EQ(err->error().code(), v1::ERROR_CODE_TIMED_OUT);
+  EXPECT_NE(err->error().message().find("api.idle_timeout_ms"), std::string::npos) << err->error().message();
+  EXPECT_TRUE(closedByServer(*idle));
+  EXPECT_EQ(server_->stats().idle_timeouts, 1u);
+  Waypoint w;
+  w.stamp_ns = 7;
+  server_->publishWaypoint(w);
+  const auto msg = watcher->nextStream(5s);
+  ASSERT_TRUE(msg.ok()) << msg.error().message;
+  EXPECT_EQ(std::get<Waypoint>(*msg).stamp_ns, 7);
+  EXPECT_TRUE(watcher->status().ok());
+}
+
+TEST_F(ApiServerTest, FailedAuthenticationsFromOneAddressAreSlowedDown) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_FALSE(c->authenticate("not-the-operator-secret").ok());
+    EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_AUTH_FAILED);
+  }
+  EXPECT_TRUE(logger_.contains(LogLevel::kWarning, "3 failed authentications from 127.0.0.1; next attempt allowed in"));
+  // Within the wait even the right secret is refused, from any connection of that address, with
+  // the wait named; after it the right secret gets in.
+  auto other = connect();
+  ASSERT_TRUE(other);
+  const auto refused = other->authenticate(kOperatorSecret);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(other->lastServerError().code, v1::ERROR_CODE_RATE_LIMITED);
+  EXPECT_NE(refused.error().message.find("next attempt is allowed in"), std::string::npos) << refused.error().message;
+  EXPECT_EQ(server_->stats().auth_failures, 3u);
+  EXPECT_EQ(server_->stats().auth_throttled, 1u);
+  std::this_thread::sleep_for(1100ms);  // the first wait is 1 s
+  EXPECT_EQ(other->authenticate(kOperatorSecret).value(), Role::kOperator);
 }
 
 TEST(ApiServerConfigTest, ValidateNamesTheKeyAndValue) {
@@ -542,6 +707,23 @@ TEST(ApiServerConfigTest, ValidateNamesTheKeyAndValue) {
   c = {};
   c.max_requests_per_s = -1.0;
   EXPECT_NE(c.validate().error().message.find("api.max_requests_per_s"), std::string::npos);
+  c = {};
+  c.max_clients_per_peer = 0;
+  EXPECT_NE(c.validate().error().message.find("api.max_clients_per_peer: 0 is outside [1, 4096]"), std::string::npos);
+  c = {};
+  c.hello_timeout = 50ms;
+  EXPECT_NE(c.validate().error().message.find("api.hello_timeout_ms: 50 is outside [100, 600000]"), std::string::npos);
+  c = {};
+  c.idle_timeout = 0ms;
+  EXPECT_NE(c.validate().error().message.find("api.idle_timeout_ms: 0"), std::string::npos);
+  c = {};
+  c.write_timeout = 700000ms;
+  EXPECT_NE(c.validate().error().message.find("api.write_timeout_ms: 700000"), std::string::npos);
+  c = {};
+  c.max_queued_bytes = 1u << 20;  // below the 4 MiB frame
+  EXPECT_NE(c.validate().error().message.find("api.max_queued_bytes: 1048576 is outside [max_frame_bytes 4194304"),
+            std::string::npos)
+      << c.validate().error().message;
 }
 
 }  // namespace
@@ -560,6 +742,65 @@ std::pair<int, std::string> vogctl(const std::string& args) {
   while (std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+// 64 connections that never send and 64 that send one byte a second, all from one address, hold
+// far more than the server's slots: the operator's vogctl still gets in, within a generous bound.
+TEST_F(ApiServerTest, VogctlIsAnsweredWhileIdleAndSlowConnectionsHoldEverySlot) {
+  start();  // the defaults: 64 clients, 16 per peer address
+  asio::io_context io;
+  const tcp::endpoint server(asio::ip::make_address("127.0.0.1"), port_);
+  std::vector<tcp::socket> idle, slow;
+  for (int i = 0; i < 64; ++i) {
+    idle.emplace_back(io).connect(server);
+    slow.emplace_back(io).connect(server);
+  }
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.accepted + s.refused_full == 128; }));
+  EXPECT_EQ(server_->stats().clients, 16u);
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool done = false;  // guarded by mutex
+  std::thread trickle([&] {
+    std::unique_lock lock(mutex);
+    do {
+      for (tcp::socket& s : slow) {
+        asio::error_code ec;  // an evicted socket fails: fine
+        (void)s.write_some(asio::buffer("\0", 1), ec);
+      }
+    } while (!cv.wait_for(lock, 1s, [&] { return done; }));
+  });
+
+  const vog::test::TempDir dir("vogctl-hostile");
+  const auto secret = dir.path() / "secret";
+  {
+    std::FILE* f = std::fopen(secret.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(kOperatorSecret, f);
+    std::fclose(f);
+  }
+  const std::string port = " --port " + std::to_string(port_);
+  auto t0 = std::chrono::steady_clock::now();
+  const auto [abort_rc, abort_out] = vogctl("mission abort --secret-file " + secret.string() + port);
+  const auto abort_time = std::chrono::steady_clock::now() - t0;
+  t0 = std::chrono::steady_clock::now();
+  const auto [status_rc, status_out] = vogctl("status --json" + port);
+  const auto status_time = std::chrono::steady_clock::now() - t0;
+  {
+    std::lock_guard lock(mutex);
+    done = true;
+  }
+  cv.notify_all();
+  trickle.join();
+
+  EXPECT_EQ(abort_rc, 0) << abort_out;
+  EXPECT_LT(abort_time, 2s);
+  ASSERT_FALSE(backend_.commands().empty());
+  EXPECT_EQ(backend_.commands().back().kind, MissionCommand::Kind::kAbort);
+  EXPECT_EQ(status_rc, 0) << status_out;
+  EXPECT_LT(status_time, 2s);
+  EXPECT_NE(status_out.find("\"mission_state\":\"aborted\""), std::string::npos) << status_out;
+  EXPECT_GE(server_->stats().evicted, 128u - 16u);
 }
 
 TEST_F(ApiServerTest, VogctlStatusWatchAndSnapshot) {

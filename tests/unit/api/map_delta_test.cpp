@@ -45,6 +45,20 @@ TEST(MapDelta, AMirrorFollowsTheMapThroughDeltas) {
   EXPECT_LT(static_cast<std::size_t>(delta.changed_size()), merged->blockCount());
   ASSERT_TRUE(mirror.apply(overTheWire(delta)).ok());
   expectMirrorEquals(mirror, *merged);
+
+  // Submap 2 leaves for good: the delta names the blocks only it covered, a full map names none (there
+  // is nothing to remove from an empty copy) and still builds the same map.
+  const std::uint64_t before_removal = merged->version();
+  ASSERT_TRUE(merged->remove(2).ok());
+  const v1::MapDelta after_removal = encodeMapDelta(*merged->snapshot(), before_removal);
+  EXPECT_GT(after_removal.removed_size(), 0);
+  ASSERT_TRUE(mirror.apply(overTheWire(after_removal)).ok());
+  expectMirrorEquals(mirror, *merged);
+  const v1::MapDelta full = encodeMapDelta(*merged->snapshot(), 0);
+  EXPECT_EQ(full.removed_size(), 0);
+  MapMirror fresh;
+  ASSERT_TRUE(fresh.apply(overTheWire(full)).ok());
+  expectMirrorEquals(fresh, *merged);
 }
 
 TEST(MapDelta, MirrorRejectsOutOfOrderAndMalformedDeltas) {

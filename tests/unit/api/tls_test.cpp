@@ -14,8 +14,10 @@
 #include <openssl/x509.h>
 #include <openssl/x509v3.h>
 
+#include <chrono>
 #include <cstdio>
 #include <thread>
+#include <vector>
 
 namespace vog::api {
 namespace {
@@ -161,6 +163,66 @@ TEST_F(TlsTest, PlainClientsAndUntrustedServersAreRefused) {
   auto good = connect(true, server_cert_.certificate_file);
   ASSERT_TRUE(good.ok()) << good.error().message;
   EXPECT_TRUE((*good)->status().ok());
+}
+
+// Sockets that never handshake and handshaken sessions that never ask hold every slot (the default
+// handshake timeout, 5 s): a verified client still gets in at once, by evicting the most idle.
+TEST_F(TlsTest, UnhandshakenAndIdleSessionsDoNotKeepTheOperatorOut) {
+  ApiServerConfig config = tlsConfig();
+  config.tls.handshake_timeout = 5s;
+  config.max_clients = 8;
+  start(config);
+  std::vector<std::unique_ptr<ApiClient>> idle;
+  for (int i = 0; i < 4; ++i) {
+    auto c = connect(true, server_cert_.certificate_file);
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    idle.push_back(std::move(*c));
+  }
+  asio::io_context io;
+  std::vector<asio::ip::tcp::socket> silent;
+  for (int i = 0; i < 16; ++i) silent.emplace_back(io).connect({asio::ip::make_address("127.0.0.1"), port_});
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.accepted + s.refused_full == 20; }));
+  EXPECT_EQ(server_->stats().clients, 8u);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto good = connect(true, server_cert_.certificate_file);
+  ASSERT_TRUE(good.ok()) << good.error().message;
+  EXPECT_EQ((*good)->authenticate(kOperatorSecret).value(), Role::kOperator);
+  EXPECT_TRUE((*good)->status().ok());
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);
+  EXPECT_EQ(server_->stats().refused_full, 0u);
+  EXPECT_GE(server_->stats().evicted, 13u);
+}
+
+// A flood of connections to a server whose slots are all held by operators: beyond twice
+// max_clients open sockets, a refused connection is closed at once instead of waiting out its TLS
+// handshake, so a flood cannot pile up sockets.
+TEST_F(TlsTest, AFloodOfRefusedConnectionsIsClosedAtOnce) {
+  ApiServerConfig config = tlsConfig();
+  config.tls.handshake_timeout = 5s;
+  config.max_clients = 2;
+  start(config);
+  std::vector<std::unique_ptr<ApiClient>> operators;
+  for (int i = 0; i < 2; ++i) {
+    auto c = connect(true, server_cert_.certificate_file);
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    ASSERT_EQ((*c)->authenticate(kOperatorSecret).value(), Role::kOperator);
+    operators.push_back(std::move(*c));
+  }
+  std::vector<std::unique_ptr<ApiClient>> flood;
+  for (int i = 0; i < 20; ++i) {
+    auto c = connect(false, {});
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    flood.push_back(std::move(*c));
+  }
+  ASSERT_TRUE(eventually([](const ApiServerStats& s) { return s.refused_full == 20; }));
+  int closed = 0;
+  for (auto& c : flood) {
+    const auto r = c->receive(100ms);
+    closed += !r.ok() && c->broken() ? 1 : 0;
+  }
+  EXPECT_EQ(closed, 18);
+  for (auto& c : operators) EXPECT_TRUE(c->status().ok());
 }
 
 TEST_F(TlsTest, BadCertificateFilesAreNamed) {

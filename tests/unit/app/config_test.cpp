@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <string>
 
 namespace vog::app {
@@ -19,6 +20,17 @@ std::string errorOf(const std::string& text) {
   EXPECT_FALSE(c.ok()) << text;
   return c.ok() ? std::string() : c.error().message;
 }
+
+// `text` written to `file` with `mode`.
+std::filesystem::path writeFile(const std::filesystem::path& file, const std::string& text,
+                                std::filesystem::perms mode) {
+  std::ofstream(file, std::ios::binary) << text;
+  std::filesystem::permissions(file, mode);
+  return file;
+}
+
+constexpr auto kOwnerOnly = std::filesystem::perms::owner_read | std::filesystem::perms::owner_write;
+constexpr auto kWorldReadable = kOwnerOnly | std::filesystem::perms::group_read | std::filesystem::perms::others_read;
 
 TEST(VogdConfig, ShippedFilesLoad) {
   for (const char* f : {"vogd.yaml", "sim/pilings.yaml", "sim/propeller.yaml"}) {
@@ -142,8 +154,27 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(da.follower.arrival_timeout_margin_s, db.follower.arrival_timeout_margin_s);
   EXPECT_EQ(da.follower.ack.resend_after_ns, db.follower.ack.resend_after_ns);
   EXPECT_EQ(da.follower.ack.max_attempts, db.follower.ack.max_attempts);
-  EXPECT_EQ(a.api.max_frame_bytes, b.api.max_frame_bytes);
-  EXPECT_EQ(a.api.max_clients, b.api.max_clients);
+  EXPECT_EQ(a.api.bind_address, b.api.bind_address);
+  EXPECT_EQ(a.api.port, b.api.port);
+  const api::ApiServerConfig& ra = a.api.server;
+  const api::ApiServerConfig& rb = b.api.server;
+  EXPECT_EQ(ra.dispatch.max_frame_bytes, rb.dispatch.max_frame_bytes);
+  EXPECT_EQ(ra.dispatch.map_blocks_per_chunk, rb.dispatch.map_blocks_per_chunk);
+  EXPECT_EQ(ra.dispatch.cloud_points_per_chunk, rb.dispatch.cloud_points_per_chunk);
+  EXPECT_EQ(ra.max_clients, rb.max_clients);
+  EXPECT_EQ(ra.max_in_flight, rb.max_in_flight);
+  EXPECT_EQ(ra.max_requests_per_s, rb.max_requests_per_s);
+  EXPECT_EQ(ra.request_burst, rb.request_burst);
+  EXPECT_EQ(ra.max_queued_responses, rb.max_queued_responses);
+  EXPECT_EQ(ra.max_queued_waypoints, rb.max_queued_waypoints);
+  EXPECT_EQ(ra.socket_send_buffer_bytes, rb.socket_send_buffer_bytes);
+  EXPECT_EQ(ra.close_timeout, rb.close_timeout);
+  EXPECT_EQ(ra.tls.handshake_timeout, rb.tls.handshake_timeout);
+  EXPECT_EQ(ra.max_clients_per_peer, rb.max_clients_per_peer);
+  EXPECT_EQ(ra.max_queued_bytes, rb.max_queued_bytes);
+  EXPECT_EQ(ra.hello_timeout, rb.hello_timeout);
+  EXPECT_EQ(ra.idle_timeout, rb.idle_timeout);
+  EXPECT_EQ(ra.write_timeout, rb.write_timeout);
   EXPECT_EQ(a.log_level, b.log_level);
 }
 
@@ -215,6 +246,184 @@ TEST(VogdConfig, CrossFieldRulesAreChecked) {
   // The simulator needs a scene; devices need a device path.
   EXPECT_NE(errorOf("source: sim\n").find("sim.scene: missing required key"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\n").find("devices.dvl"), std::string::npos);
+}
+
+// The operator secret is refused as ssh refuses a private key, at the key's line, naming the file.
+TEST(VogdConfig, SecretFileIsCheckedWhenRead) {
+  test::TempDir dir("vog-config");
+  const auto withSecret = [](const std::filesystem::path& f) {
+    return "source: devices\napi:\n  port: 0\n  secret_file: " + f.string() + "\n";
+  };
+  const std::string secret = "correct horse battery staple\n";
+  const auto shared = writeFile(dir.path() / "shared", secret, kWorldReadable);
+  std::string e = errorOf(withSecret(shared));
+  EXPECT_NE(e.find("test.yaml:4: api.secret_file: " + shared.string() + " has mode 0644"), std::string::npos) << e;
+  EXPECT_NE(e.find("chmod 600 " + shared.string()), std::string::npos) << e;
+  e = errorOf(withSecret(dir.path()));
+  EXPECT_NE(e.find("test.yaml:4: api.secret_file: " + dir.path().string() + " is a directory"), std::string::npos) << e;
+  e = errorOf(withSecret(dir.path() / "missing"));
+  EXPECT_NE(e.find("test.yaml:4: api.secret_file: cannot open " + (dir.path() / "missing").string()), std::string::npos)
+      << e;
+  e = errorOf(withSecret(writeFile(dir.path() / "short", "fifteen bytes!!\n", kOwnerOnly)));
+  EXPECT_NE(e.find("test.yaml:4: api.secret_file:"), std::string::npos) << e;
+  EXPECT_NE(e.find("holds 15 bytes, fewer than 16 bytes (a secret has 16 to 4096 bytes)"), std::string::npos) << e;
+  e = errorOf(withSecret(writeFile(dir.path() / "long", std::string(4097, 'x'), kOwnerOnly)));
+  EXPECT_NE(e.find("holds too many bytes (a secret has 16 to 4096 bytes)"), std::string::npos) << e;
+
+  const auto good = writeFile(dir.path() / "good", secret, kOwnerOnly);
+  auto c = parse("source: sim\nsim: {scene: scenes/pilings.yaml}\napi: {secret_file: " + good.string() + "}\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->api.secret_file, good);
+  EXPECT_EQ(readSecretFile(good).value(), "correct horse battery staple");
+}
+
+// The certificate and key are loaded by the function the server starts with.
+TEST(VogdConfig, TlsFilesAreLoadedAsTheServerLoadsThem) {
+  test::TempDir dir("vog-config");
+  const auto garbage = writeFile(dir.path() / "server.pem", "-----BEGIN CERTIFICATE-----\nnot base64\n", kOwnerOnly);
+  const auto key = writeFile(dir.path() / "server.key", "not a key\n", kOwnerOnly);
+  std::string e = errorOf("source: devices\napi:\n  tls:\n    certificate_file: " + garbage.string() +
+                          "\n    private_key_file: " + key.string() + "\n");
+  EXPECT_NE(e.find("test.yaml:4: api.tls.certificate_file: cannot use " + garbage.string()), std::string::npos) << e;
+  e = errorOf("source: devices\napi:\n  tls:\n    private_key_file: " + key.string() +
+              "\n    certificate_file: missing.pem\n");
+  EXPECT_NE(e.find("test.yaml:5: api.tls.certificate_file: cannot use " + (configDir() / "missing.pem").string()),
+            std::string::npos)
+      << e;
+}
+
+TEST(VogdConfig, MissingSceneIsRefused) {
+  const std::string e = errorOf("source: sim\nsim:\n  scene: scenes/missing.yaml\n");
+  EXPECT_NE(e.find("test.yaml:3: sim.scene: cannot open scene " + (configDir() / "scenes/missing.yaml").string()),
+            std::string::npos)
+      << e;
+}
+
+TEST(VogdConfig, BindAddressMustBeAnIpAddress) {
+  EXPECT_NE(errorOf("source: devices\napi:\n  bind_address: vehicle.local\n")
+                .find("test.yaml:3: api.bind_address: must be an IPv4 or IPv6 address, got 'vehicle.local'"),
+            std::string::npos);
+  for (const char* address : {"0.0.0.0", "::1", "192.168.1.2"}) {
+    auto c =
+        parse(std::string("source: sim\nsim: {scene: scenes/pilings.yaml}\napi: {bind_address: '") + address + "'}\n");
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    EXPECT_EQ(c->api.bind_address, address);
+  }
+}
+
+// Every ApiServerConfig setting has its key; what the file says is what the server gets.
+TEST(VogdConfig, EveryServerSettingRoundTrips) {
+  auto c = parse(
+      "source: sim\nsim: {scene: scenes/pilings.yaml}\n"
+      "api:\n"
+      "  bind_address: 10.0.0.2\n  port: 29601\n  max_clients: 4096\n  max_frame_bytes: 1048576\n"
+      "  map_blocks_per_chunk: 100\n  cloud_points_per_chunk: 1000\n  max_in_flight: 8\n"
+      "  max_requests_per_s: 50.5\n  request_burst: 60\n  max_queued_responses: 300\n"
+      "  max_queued_waypoints: 70\n  socket_send_buffer_bytes: 65536\n  close_timeout_ms: 250\n"
+      "  max_clients_per_peer: 3\n  max_queued_bytes: 2097152\n  hello_timeout_ms: 2000\n"
+      "  idle_timeout_ms: 60000\n  write_timeout_ms: 3000\n"
+      "  tls: {handshake_timeout_ms: 1500}\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  const ApiSection& a = c->api;
+  EXPECT_EQ(a.bind_address, "10.0.0.2");
+  EXPECT_EQ(a.port, 29601);
+  EXPECT_EQ(a.server.max_clients, 4096u);
+  EXPECT_EQ(a.server.dispatch.max_frame_bytes, 1048576u);
+  EXPECT_EQ(a.server.dispatch.map_blocks_per_chunk, 100u);
+  EXPECT_EQ(a.server.dispatch.cloud_points_per_chunk, 1000u);
+  EXPECT_EQ(a.server.max_in_flight, 8u);
+  EXPECT_EQ(a.server.max_requests_per_s, 50.5);
+  EXPECT_EQ(a.server.request_burst, 60.0);
+  EXPECT_EQ(a.server.max_queued_responses, 300u);
+  EXPECT_EQ(a.server.max_queued_waypoints, 70u);
+  EXPECT_EQ(a.server.socket_send_buffer_bytes, 65536);
+  EXPECT_EQ(a.server.close_timeout, std::chrono::milliseconds(250));
+  EXPECT_EQ(a.server.tls.handshake_timeout, std::chrono::milliseconds(1500));
+  EXPECT_EQ(a.server.max_clients_per_peer, 3u);
+  EXPECT_EQ(a.server.max_queued_bytes, 2097152u);
+  EXPECT_EQ(a.server.hello_timeout, std::chrono::milliseconds(2000));
+  EXPECT_EQ(a.server.idle_timeout, std::chrono::milliseconds(60000));
+  EXPECT_EQ(a.server.write_timeout, std::chrono::milliseconds(3000));
+  EXPECT_TRUE(a.server.validate().ok());
+}
+
+// The ranges are the server's (vog/api/limits.hpp), named with the key's line.
+TEST(VogdConfig, ServerSettingsOutOfRangeNameTheirRange) {
+  const struct {
+    const char* line;
+    const char* expected;
+  } cases[] = {
+      {"max_clients: 5000", "api.max_clients: must be in [1, 4096], got 5000"},
+      {"max_frame_bytes: 1000", "api.max_frame_bytes: must be in [65536, 1073741824], got 1000"},
+      {"map_blocks_per_chunk: 0", "api.map_blocks_per_chunk: must be in [1, 1048576], got 0"},
+      {"cloud_points_per_chunk: 0", "api.cloud_points_per_chunk: must be in [1, 16777216], got 0"},
+      {"max_in_flight: 2000", "api.max_in_flight: must be in [1, 1024], got 2000"},
+      {"max_requests_per_s: 0", "api.max_requests_per_s: must be in [0.001, 1e+06], got 0"},
+      {"request_burst: 0.5", "api.request_burst: must be in [1, 1e+06], got 0.5"},
+      {"max_queued_responses: 70000", "api.max_queued_responses: must be in [1, 65536], got 70000"},
+      {"max_queued_waypoints: 0", "api.max_queued_waypoints: must be in [1, 65536], got 0"},
+      {"socket_send_buffer_bytes: -1", "api.socket_send_buffer_bytes: must be in [0, 67108864], got -1"},
+      {"close_timeout_ms: 0", "api.close_timeout_ms: must be in [1, 60000], got 0"},
+      {"tls: {handshake_timeout_ms: 0}", "api.tls.handshake_timeout_ms: must be in [1, 600000], got 0"},
+      {"max_clients_per_peer: 0", "api.max_clients_per_peer: must be in [1, 4096], got 0"},
+      {"max_queued_bytes: 1000", "api.max_queued_bytes: must be in [65536, 4294967296], got 1000"},
+      {"hello_timeout_ms: 50", "api.hello_timeout_ms: must be in [100, 600000], got 50"},
+      {"idle_timeout_ms: 999", "api.idle_timeout_ms: must be in [1000, 86400000], got 999"},
+      {"write_timeout_ms: 99", "api.write_timeout_ms: must be in [100, 600000], got 99"},
+  };
+  for (const auto& c : cases) {
+    const std::string e = errorOf(std::string("source: devices\napi:\n  ") + c.line + "\n");
+    EXPECT_NE(e.find(std::string("test.yaml:3: ") + c.expected), std::string::npos) << c.line << ": " << e;
+  }
+}
+
+// Rules across keys are the server's own, reported at the line of the key at fault.
+TEST(VogdConfig, ServerCrossFieldRulesNameTheKeyAtFault) {
+  // The default chunks need 32768 x 24 + 1024 = 787456 bytes.
+  std::string e = errorOf("source: devices\napi:\n  port: 0\n  max_frame_bytes: 787455\n");
+  EXPECT_NE(e.find("test.yaml:4: api.max_frame_bytes: must be in [787456, 1073741824] for map_blocks_per_chunk 256 "
+                   "and cloud_points_per_chunk 32768, got 787455"),
+            std::string::npos)
+      << e;
+  auto c = parse("source: sim\nsim: {scene: scenes/pilings.yaml}\napi: {max_frame_bytes: 787456}\n");
+  EXPECT_TRUE(c.ok()) << c.error().message;
+  // A chunk larger than the (default) frame is the chunk size's fault.
+  e = errorOf("source: devices\napi:\n  port: 0\n  map_blocks_per_chunk: 2000\n");
+  EXPECT_NE(e.find("test.yaml:4: api.map_blocks_per_chunk: 2000 is outside [1, 1906]"), std::string::npos) << e;
+  e = errorOf("source: devices\napi:\n  max_in_flight: 32\n  max_queued_responses: 16\n");
+  EXPECT_NE(e.find("test.yaml:4: api.max_queued_responses: 16 is"), std::string::npos) << e;
+  EXPECT_NE(e.find("max_in_flight 32"), std::string::npos) << e;
+  e = errorOf("source: devices\napi:\n  max_frame_bytes: 4194304\n  max_queued_bytes: 1048576\n");
+  EXPECT_NE(e.find("test.yaml:4: api.max_queued_bytes: 1048576 is"), std::string::npos) << e;
+}
+
+// The mission folder: checked by writing there, as vogd will; nothing is left behind.
+TEST(VogdConfig, MissionDirectoryMustBeWritable) {
+  test::TempDir dir("vog-config");
+  auto c =
+      parse("source: sim\nsim: {scene: scenes/pilings.yaml}\nmission:\n  directory: " + dir.path().string() + "\n");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  EXPECT_EQ(c->mission.directory_setting, "test.yaml:4: mission.directory");
+  const std::filesystem::path folder = c->mission.directory / c->mission.name;
+  EXPECT_TRUE(checkMissionDirectory(folder, c->mission.directory_setting).ok());
+  EXPECT_FALSE(std::filesystem::exists(folder)) << "the check creates nothing";
+  std::filesystem::create_directory(folder);
+  EXPECT_TRUE(checkMissionDirectory(folder, "m").ok());
+  EXPECT_TRUE(std::filesystem::is_empty(folder)) << "the probe file is removed";
+
+  const auto file = writeFile(dir.path() / "file", "x", kOwnerOnly);
+  Status s = checkMissionDirectory(file, "test.yaml:4: mission.directory");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message,
+            "test.yaml:4: mission.directory: " + file.string() + ": " + file.string() + " is not a directory");
+  s = checkMissionDirectory(file / "missions" / "current", "m");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find(file.string() + " is not a directory"), std::string::npos) << s.error().message;
+  // Not writable even by root: procfs takes no new files.
+  s = checkMissionDirectory("/proc/vogd-missions/current", "m");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("m: /proc/vogd-missions/current: cannot write in /proc"), std::string::npos)
+      << s.error().message;
 }
 
 TEST(VogdConfig, UnreadableFileIsNamed) {

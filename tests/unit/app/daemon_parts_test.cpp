@@ -3,12 +3,14 @@
 // API's reconstruction cloud.
 #include "vog/app/mapping_stage.hpp"
 #include "vog/app/raw_recorder.hpp"
+#include "vog/app/replay.hpp"
 #include "vog/app/reconstruction_cloud.hpp"
 #include "vog/app/scan_queue.hpp"
 #include "vog/app/scan_record.hpp"
 #include "vog/app/source_alignment.hpp"
 #include "vog/app/watchdog.hpp"
 
+#include "small_tmpfs.hpp"
 #include "synthetic_scene.hpp"
 #include "test_support.hpp"
 
@@ -185,13 +187,83 @@ TEST(RawRecorder, TheMappingGateIsRecordedWhenItChangesBeforeTheInputsItGates) {
       r.gate(enabled, 10);
       r.record(7, 10, bytes);
     }
-    ASSERT_TRUE(r.sync().ok());
+    r.sync();
+    EXPECT_FALSE(r.health().fault.has_value());
   }
   const mission::RawLogContents contents = mission::readRawLog(file).value();
   std::vector<int> gates;  // gate records as 0/1, and -1 for each device record
   for (const mission::RawRecord& rec : contents.records)
     gates.push_back(rec.device_id == kMappingGateDeviceId ? rec.bytes.at(0) : -1);
   EXPECT_EQ(gates, (std::vector<int>{0, -1, -1, 1, -1, -1, 0, -1}));
+}
+
+// Recording off (the mission ended) keeps the records up to the gate record that closes the gate, and
+// drops what comes after it until recording is on again.
+TEST(RawRecorder, RecordingStopsAtTheClosedGateWhenTheMissionEnds) {
+  test::TempDir dir("raw-recorder");
+  const std::filesystem::path file = dir.path() / "raw.log";
+  {
+    RawRecorder r(mission::RawLog::open(file).value());
+    const std::uint8_t bytes[1] = {5};
+    r.gate(true, 1);
+    r.record(7, 1, bytes);
+    r.setRecording(false);
+    r.record(7, 2, bytes);  // still mapped live: kept
+    r.gate(false, 3);
+    r.record(7, 3, bytes);  // after the end: dropped
+    r.record(7, 4, bytes);
+    EXPECT_FALSE(r.health().recording);
+    r.setRecording(true);
+    r.gate(true, 5);
+    r.record(7, 5, bytes);
+    r.sync();
+  }
+  const mission::RawLogContents contents = mission::readRawLog(file).value();
+  std::vector<std::int64_t> stamps;
+  for (const mission::RawRecord& rec : contents.records) stamps.push_back(rec.stamp_ns);
+  EXPECT_EQ(stamps, (std::vector<std::int64_t>{1, 1, 2, 3, 5, 5}));
+}
+
+// A simulated recording under a small cap: scans 0-99 mapped, 100-199 outside the mission, 200-299
+// mapped again. The oldest segments are dropped; a replay of what is left maps exactly the scans that
+// were mapped live (every segment starts with the gate) and says how many segments were dropped.
+TEST(RawRecorder, ACappedLogReplaysWhatIsLeftBehindTheSameGate) {
+  test::TempDir dir("raw-capped");
+  const std::filesystem::path mission_dir = dir.path() / "mission";
+  std::filesystem::create_directories(mission_dir);
+  VogdConfig config;
+  config.source = Source::kSim;
+  const test::SyntheticScene scene = test::SyntheticScene::pier();
+  const std::vector<Pose3> orbit = test::orbitTrajectory(300, 5.5, -2.0);
+  std::mt19937_64 rng(7);
+  {
+    RawRecorder raw(
+        mission::RawLog::open(mission_dir / mission::MissionStore::kRawLogFile, mission::kMinRawLogBytes).value());
+    for (int k = 0; k < 300; ++k) {
+      slam::ScanInput scan;
+      scan.T_world_vehicle_odom = orbit[static_cast<std::size_t>(k)];
+      scan.z_roll_pitch = Eigen::Vector3d(orbit[static_cast<std::size_t>(k)].translation().z(), 0.0, 0.0);
+      scan.scan = scene.scan(orbit[static_cast<std::size_t>(k)], config.mapping.builder.fan, 0.0, rng);
+      scan.scan.stamp_ns = k;
+      raw.gate(k < 100 || k >= 200, k);
+      raw.record(kSimScanDeviceId, k, encodeScanRecord(scan));
+    }
+    raw.sync();
+    EXPECT_GT(raw.health().dropped_segments, 0u);
+  }
+  const mission::RawLogContents left = mission::readRawLog(mission_dir / mission::MissionStore::kRawLogFile).value();
+  ASSERT_GT(left.dropped_segments, 0u);
+  std::vector<std::int64_t> scans;
+  for (const mission::RawRecord& r : left.records)
+    if (r.device_id == kSimScanDeviceId) scans.push_back(r.stamp_ns);
+  ASSERT_FALSE(scans.empty());
+  ASSERT_GT(scans.front(), 100) << "the test needs the gate's closing record dropped";
+  ASSERT_LT(scans.front(), 200);
+  auto stats = replayMission(config, mission_dir, dir.path() / "replay");
+  ASSERT_TRUE(stats.ok()) << stats.error().message;
+  EXPECT_EQ(stats->dropped_segments, left.dropped_segments);
+  EXPECT_EQ(stats->scans, 100u);
+  EXPECT_EQ(stats->not_mapped, static_cast<std::uint64_t>(200 - scans.front()));
 }
 
 // A pier survey of 25 scans in submaps of 10, through the mapping stage with the simulator's
@@ -262,6 +334,47 @@ TEST(MappingStage, ASubmapIsDurableBeforeItIsPublishedAndTheActiveOneIsStoredAtT
   ASSERT_TRUE(merge->waitIdle().ok());
   EXPECT_EQ(merge->snapshot()->submapCount(), 3u);
   merge->stop();
+}
+
+// The mission folder on a tmpfs that fills up: mapping goes on and publishes, the storage health entry
+// says why and how many submaps wait, and once space returns retryStorage() writes them.
+TEST(MappingStage, AFullDiskIsReportedInTheStorageHealthAndRetried) {
+  test::SmallTmpfs disk(1 << 20);
+  if (!disk.mounted()) GTEST_SKIP() << "needs a tmpfs to fill: " << disk.error();
+  test::TempDir dir("mapping-stage-full");
+  slam::MappingPipelineConfig config;
+  config.builder.max_scans = 5;
+  auto store = mission::MissionStore::open(disk.path() / "mission", config.builder.grid).value();
+  RawRecorder raw(mission::RawLog::open(dir.path() / mission::MissionStore::kRawLogFile).value());
+  auto merge = map::MergeWorker::create(config.builder.grid, map::MergeConfig{}).value();
+  MappingStage stage(true, slam::MappingPipeline::create(config).value(), *store, raw, *merge, nullptr);
+  ASSERT_TRUE(disk.fill());
+  const test::SyntheticScene scene = test::SyntheticScene::pier();
+  const std::vector<Pose3> orbit = test::orbitTrajectory(12, 5.5, -2.0);
+  std::mt19937_64 rng(7);
+  for (int k = 0; k < 12; ++k) {
+    QueuedScan item;
+    item.scan.T_world_vehicle_odom = orbit[static_cast<std::size_t>(k)];
+    item.scan.z_roll_pitch = Eigen::Vector3d(orbit[static_cast<std::size_t>(k)].translation().z(), 0.0, 0.0);
+    item.scan.scan = scene.scan(orbit[static_cast<std::size_t>(k)], config.builder.fan, 0.0, rng);
+    item.scan.scan.stamp_ns = (k + 1) * 200'000'000LL;
+    ASSERT_TRUE(stage.process(item, true).ok());
+  }
+  EXPECT_EQ(stage.state()->submaps.size(), 2u) << "mapping goes on in memory";
+  const api::DeviceHealth full = stage.storageHealth();
+  EXPECT_EQ(full.name, "storage");
+  EXPECT_EQ(full.state, api::DeviceState::kDegraded);
+  EXPECT_NE(full.detail.find("No space left on device (2 submaps pending)"), std::string::npos) << full.detail;
+  disk.release();
+  stage.retryStorage();
+  const api::DeviceHealth freed = stage.storageHealth();
+  EXPECT_EQ(freed.state, api::DeviceState::kOk) << freed.detail;
+  EXPECT_EQ(store->health().pending_submaps, 0u);
+  merge->stop();
+  store.reset();
+  mission::MissionResume resume;
+  ASSERT_TRUE(mission::MissionStore::open(disk.path() / "mission", config.builder.grid, &resume).ok());
+  EXPECT_EQ(resume.pipeline.submaps.size(), 2u);
 }
 
 // The cloud is the merged map's occupied voxel centres, built once per map version.

@@ -104,8 +104,10 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
         120.0);
     ASSERT_EQ(done.mission_state, api::MissionState::kComplete) << "the budget of 4 submaps ends the mission at home";
     EXPECT_GE(done.n_submaps, 4u);
-    ASSERT_EQ(done.devices.size(), 1u);
+    ASSERT_EQ(done.devices.size(), 2u);
     EXPECT_EQ(done.devices[0].state, api::DeviceState::kOk) << done.devices[0].detail;  // no collision
+    EXPECT_EQ(done.devices[1].name, "storage");
+    EXPECT_EQ(done.devices[1].state, api::DeviceState::kOk) << done.devices[1].detail;
     // The map is served: a snapshot with occupied voxels and a cloud of them.
     auto cloud = c->cloud();
     ASSERT_TRUE(cloud.ok()) << cloud.error().message;

@@ -1,6 +1,7 @@
 // The vogd executable as systemd runs it: READY and WATCHDOG on the notify socket, kill -9 in the
-// middle of a mission followed by a restart that resumes every closed submap and keeps mapping, and
-// SIGTERM answered by STOPPING and a clean exit within 2 s.
+// middle of a mission followed by a restart that resumes every closed submap and keeps mapping,
+// SIGTERM answered by STOPPING and a clean exit within 2 s, and --check-config (ExecStartPre)
+// refusing what vogd would refuse.
 #include "vog/client/api_client.hpp"
 
 #include "subprocess.hpp"
@@ -127,6 +128,47 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
     EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 2.0);
   }
   EXPECT_EQ(logText(log).find("rejected"), std::string::npos) << "no scan may be refused after the resume";
+}
+
+// ExecStartPre=vogd --check-config must fail (exit 2, the reason with file:line) on what vogd would
+// refuse at startup, or Restart=on-failure loops on it.
+TEST(VogdProcess, CheckConfigRefusesWhatVogdWouldRefuse) {
+  vog::test::TempDir dir("vogd-check");
+  const fs::path secret = dir.path() / "operator.secret", config = dir.path() / "vogd.yaml";
+  std::ofstream(secret) << "correct horse battery staple\n";
+  fs::permissions(secret, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  const std::string text =
+      "source: sim\n"
+      "sim:\n  scene: " +
+      (vog::test::sourceDir() / "config/scenes/pilings.yaml").string() +
+      "\n"
+      "api:\n  port: 0\n  secret_file: operator.secret\n";
+  std::ofstream(config) << text;
+  const auto check = [&](const std::vector<std::string>& extra, const fs::path& log) {
+    std::vector<std::string> args = {VOGD_EXECUTABLE, "--config", config.string(), "--check-config"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    vog::test::Subprocess vogd(args, {}, log);
+    return vogd.started() ? vogd.wait(30.0) : -1;
+  };
+  const fs::path mission = dir.path() / "missions" / "current";
+  EXPECT_EQ(check({"--mission-dir", mission.string()}, dir.path() / "secret.log"), 2);
+  EXPECT_NE(logText(dir.path() / "secret.log")
+                .find("vogd.yaml:6: api.secret_file: " + secret.string() +
+                      " has mode 0640, accessible by group or others; chmod 600 " + secret.string()),
+            std::string::npos)
+      << logText(dir.path() / "secret.log");
+
+  fs::permissions(secret, fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_EQ(check({"--mission-dir", mission.string()}, dir.path() / "ok.log"), 0) << logText(dir.path() / "ok.log");
+  EXPECT_FALSE(fs::exists(dir.path() / "missions")) << "the check leaves nothing behind";
+
+  std::ofstream(dir.path() / "missions") << "a file";
+  EXPECT_EQ(check({"--mission-dir", mission.string()}, dir.path() / "mission.log"), 2);
+  EXPECT_NE(logText(dir.path() / "mission.log")
+                .find("--mission-dir: " + mission.string() + ": " + (dir.path() / "missions").string() +
+                      " is not a directory"),
+            std::string::npos)
+      << logText(dir.path() / "mission.log");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "vog/map/local_grid.hpp"
 
 #include "synthetic_scene.hpp"
+#include "small_tmpfs.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -221,6 +222,27 @@ TEST(LocalGrid, SaveAndLoadKeepEveryLeaf) {
   other.resolution_m = 0.2;
   EXPECT_FALSE(LocalGrid::load(other, dir.path() / "g.ot").ok());
   EXPECT_FALSE(LocalGrid::load(GridConfig{}, dir.path() / "missing.ot").ok());
+}
+
+// OctoMap's own writer reports success on a full disk; save() must not: an error naming the cause,
+// and no file under the name.
+TEST(LocalGrid, SaveOnAFullDiskIsAnErrorAndLeavesNoFile) {
+  test::SmallTmpfs disk(256 * 1024);
+  if (!disk.mounted()) GTEST_SKIP() << "needs a tmpfs to fill: " << disk.error();
+  auto grid = makeGrid();
+  const std::vector<BeamEnd> beams = {{Eigen::Vector3d(1.0, 0.5, 0.2), true}, {Eigen::Vector3d(-1.0, 2.0, 0.0), false}};
+  ASSERT_TRUE(grid->insertRays(Eigen::Vector3d::Zero(), beams).ok());
+  grid->finalize();
+  ASSERT_TRUE(disk.fill());
+  const Status saved = grid->save(disk.path() / "g.ot");
+  ASSERT_FALSE(saved.ok()) << "a save on a full disk reported success";
+  EXPECT_NE(saved.error().message.find("No space left on device"), std::string::npos) << saved.error().message;
+  EXPECT_FALSE(std::filesystem::exists(disk.path() / "g.ot"));
+  disk.release();
+  ASSERT_TRUE(grid->save(disk.path() / "g.ot").ok());
+  auto loaded = LocalGrid::load(GridConfig{}, disk.path() / "g.ot");
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  EXPECT_EQ((*loaded)->leaves().size(), grid->leaves().size());
 }
 
 }  // namespace

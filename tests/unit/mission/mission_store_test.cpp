@@ -4,6 +4,7 @@
 // path that is a file or not writable, a submap file missing or corrupt, a journal naming an unknown
 // record type, hooks called out of order.
 #include "journal_fixture.hpp"
+#include "small_tmpfs.hpp"
 #include "test_support.hpp"
 #include "vog/map/local_grid.hpp"
 #include "vog/mission/mission_store.hpp"
@@ -315,6 +316,72 @@ TEST(MissionStore, HooksOutOfOrderAreRefusedAndChangeNothing) {
   EXPECT_FALSE(s.onOptimized({{0, nan}}).ok());
   EXPECT_EQ(s.nextSubmapIndex(), 0);
   EXPECT_EQ(std::filesystem::file_size(dir.path() / "m" / MissionStore::kJournalFile), 0U);
+}
+
+void closeSubmap(MissionStore& store, std::int64_t k) {
+  ASSERT_TRUE(store.onSubmapClosed(closedSubmap(k)).ok());
+  ASSERT_TRUE(store.onClosures({}).ok());
+  ASSERT_TRUE(store.onOptimized({{k, estimate(k, 0)}}).ok());
+}
+
+// The mission folder on a small tmpfs that fills up: mapping goes on (the hooks succeed), the fault and
+// the pending submaps are reported, nothing in the journal names a missing or bad file (a copy of the
+// folder taken while full resumes exactly the submap written before), and once space returns the
+// pending submaps are written in order and a restart resumes all of them with identical grids.
+TEST(MissionStore, AFullDiskKeepsSubmapsPendingAndWritesThemInOrderWhenSpaceReturns) {
+  test::SmallTmpfs disk(1 << 20);
+  if (!disk.mounted()) GTEST_SKIP() << "needs a tmpfs to fill: " << disk.error();
+  const auto mission = disk.path() / "mission";
+  {
+    auto opened = MissionStore::open(mission, gridConfig());
+    ASSERT_TRUE(opened.ok()) << opened.error().message;
+    MissionStore& store = *opened.value();
+    closeSubmap(store, 0);
+    ASSERT_FALSE(store.health().fault);
+    ASSERT_TRUE(disk.fill());
+
+    closeSubmap(store, 1);
+    ASSERT_TRUE(store.onWaypoint(WaypointRecord{7, 1.0, 2.0, -3.0, 0.5}).ok());
+    closeSubmap(store, 2);
+    ASSERT_TRUE(store.onState(MissionStateRecord{9, MissionState::kReturning}).ok());
+    StorageHealth full = store.retryPending();
+    ASSERT_TRUE(full.fault.has_value());
+    EXPECT_NE(full.fault->message.find("No space left on device"), std::string::npos) << full.fault->message;
+    EXPECT_EQ(full.pending_submaps, 2u);
+    EXPECT_EQ(full.pending_records, 2u);
+    EXPECT_EQ(store.nextSubmapIndex(), 3);
+
+    // What is on disk now resumes as it was before the disk filled.
+    test::TempDir copy;
+    std::filesystem::copy(mission, copy.path() / "m", std::filesystem::copy_options::recursive);
+    MissionResume while_full;
+    auto reopened = MissionStore::open(copy.path() / "m", gridConfig(), &while_full);
+    ASSERT_TRUE(reopened.ok()) << reopened.error().message;
+    EXPECT_EQ(while_full.pipeline.submaps.size(), 1u);
+    EXPECT_EQ(while_full.uncommitted_records, 0u);
+    EXPECT_FALSE(while_full.journal_tail.torn);
+
+    disk.release();
+    const StorageHealth freed = store.retryPending();
+    EXPECT_FALSE(freed.fault.has_value()) << freed.fault->message;
+    EXPECT_EQ(freed.pending_submaps, 0u);
+    EXPECT_EQ(freed.pending_records, 0u);
+  }
+  MissionResume resume;
+  auto reopened = MissionStore::open(mission, gridConfig(), &resume);
+  ASSERT_TRUE(reopened.ok()) << reopened.error().message;
+  ASSERT_EQ(resume.pipeline.submaps.size(), 3u);
+  for (std::int64_t k = 0; k < 3; ++k) {
+    const auto& got = resume.pipeline.submaps[static_cast<std::size_t>(k)];
+    EXPECT_EQ(got.index, k);
+    expectGridsEqual(*got.grid, *closedSubmap(k).grid);
+    EXPECT_EQ(resume.pipeline.estimates[static_cast<std::size_t>(k)], estimate(k, 0));
+  }
+  ASSERT_TRUE(resume.state.has_value());
+  EXPECT_EQ(resume.state->state, MissionState::kReturning);
+  ASSERT_TRUE(resume.waypoint.has_value());
+  EXPECT_EQ(resume.waypoint->stamp_ns, 7);
+  EXPECT_EQ(resume.uncommitted_records, 0u);
 }
 
 }  // namespace

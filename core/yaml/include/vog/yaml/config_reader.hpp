@@ -56,6 +56,8 @@ class ConfigMap {
   // Records an error for `key` of this mapping (cross-field checks).
   void fail(const std::string& key, const std::string& what);
   bool has(const std::string& key) const;
+  // "source:line" of `key`'s value, or of this mapping when the key is absent (for later errors).
+  std::string location(const std::string& key) const;
   std::string path(const std::string& key) const;
 
  private:

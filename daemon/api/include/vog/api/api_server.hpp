@@ -4,11 +4,32 @@
 // streams (waypoints, poses, status) that other threads publish.
 //
 // Per-client outbound queue (the rule that keeps a slow topside from stalling the vehicle):
-//  - responses are never dropped; a client with more than `max_queued_responses` unsent response
-//    frames cannot keep up and is disconnected;
+//  - responses are never dropped. While a client's unsent responses number `max_queued_responses`
+//    or leave less than one maximum frame of its `max_queued_bytes`, its requests are not decoded
+//    (nor more bytes read): they wait in the socket until the replies drain (TCP flow control), and
+//    every request decoded gets exactly one reply (or its transfer);
 //  - waypoints queue up to `max_queued_waypoints`, then the oldest is dropped and counted; poses and
 //    status are coalesced (a newer one replaces an unsent one, counted);
-//  - map and cloud transfers are produced chunk by chunk as the socket drains.
+//  - map and cloud transfers are encoded chunk by chunk from the held immutable snapshot as the
+//    socket drains, one transfer at a time, and only while a maximum frame still fits in the
+//    client's `max_queued_bytes` (responses and the batch being written count); later transfers
+//    wait as a snapshot pointer. So a client's queued bytes never exceed `max_queued_bytes`, apart
+//    from the one Error frame that precedes a disconnect;
+//  - a socket that accepts no byte for `write_timeout` while the server has data for it is closed
+//    (a reader that never reads), counted as a slow disconnect.
+// Connection slots (`max_clients`, `max_clients_per_peer` per peer address): a session must complete
+// a request within `hello_timeout` of connecting (the TLS handshake included) and is closed after
+// `idle_timeout` without a request, unless it is subscribed to a stream or still being answered.
+// When the server or the peer's share is full, a new connection takes the slot of the most idle
+// unauthenticated session (of that peer when the peer's share is full): first those that never
+// completed a request (oldest first), then those with nothing subscribed or pending (longest since
+// their last request first), then the rest. The evicted session gets TOO_MANY_CLIENTS and is closed.
+// Eviction rather than a slot reserved for authentication, because an operator's plain `vogctl
+// status` needs no authentication and must still get in, and because a reserved slot can itself be
+// held by a hostile client for hello_timeout again and again. Authenticated operator sessions are
+// never evicted; when every candidate is one, the new connection is refused with TOO_MANY_CLIENTS.
+// Failed authentications are counted per peer address: after 3, each further attempt waits (1 s,
+// doubling to 30 s); an attempt during the wait is refused (RATE_LIMITED, naming the wait) and logged.
 // Protocol violations (malformed frame, oversize length, unknown message type) get an Error frame,
 // then that client alone is disconnected. With TLS configured every session starts with a TLS
 // handshake; a client that fails it (plain TCP, a bad certificate) is closed and counted.
@@ -43,13 +64,18 @@ struct ApiServerConfig {
   DispatchConfig dispatch;
   TlsServerConfig tls;  // disabled when no certificate is given
   std::size_t max_clients = 64;
-  std::size_t max_in_flight = 16;                 // requests whose replies are not yet handed to the socket
-  double max_requests_per_s = 200.0;              // token bucket refill rate per client
-  double request_burst = 400.0;                   // token bucket size per client
-  std::size_t max_queued_responses = 256;         // unsent response frames per client before a disconnect
-  std::size_t max_queued_waypoints = 64;          // per client; the oldest is dropped beyond
-  int socket_send_buffer_bytes = 0;               // SO_SNDBUF of client sockets; 0 keeps the OS default
-  std::chrono::milliseconds close_timeout{1000};  // a closing client gets this long to read its error
+  std::size_t max_in_flight = 16;                  // requests whose replies are not yet handed to the socket
+  double max_requests_per_s = 200.0;               // token bucket refill rate per client
+  double request_burst = 400.0;                    // token bucket size per client
+  std::size_t max_queued_responses = 256;          // unsent response frames per client; then its requests wait
+  std::size_t max_queued_waypoints = 64;           // per client; the oldest is dropped beyond
+  int socket_send_buffer_bytes = 0;                // SO_SNDBUF of client sockets; 0 keeps the OS default
+  std::chrono::milliseconds close_timeout{1000};   // a closing client gets this long to read its error
+  std::size_t max_clients_per_peer = 16;           // sessions from one peer address
+  std::chrono::milliseconds hello_timeout{5000};   // from connect to the first complete request
+  std::chrono::milliseconds idle_timeout{300000};  // without a request, unless subscribed or being answered
+  std::size_t max_queued_bytes = 8u << 20;         // per client: unsent responses + the batch being written
+  std::chrono::milliseconds write_timeout{10000};  // without write progress while data waits: disconnect
 
   // Names the first bad key and value.
   Status validate() const;
@@ -58,14 +84,21 @@ struct ApiServerConfig {
 struct ApiServerStats {
   std::uint64_t clients = 0;  // connected now
   std::uint64_t accepted = 0;
-  std::uint64_t refused_full = 0;      // refused: max_clients reached
+  std::uint64_t refused_full = 0;      // refused: full, and no session could be evicted
   std::uint64_t protocol_errors = 0;   // disconnects for malformed/oversize/unknown frames
   std::uint64_t tls_failures = 0;      // TLS handshakes that failed or timed out
-  std::uint64_t slow_disconnects = 0;  // disconnects for unread responses
+  std::uint64_t slow_disconnects = 0;  // disconnects for no write progress in write_timeout
   std::uint64_t stream_drops = 0;      // stream messages dropped or coalesced, all clients
   std::uint64_t waypoint_drops = 0;    // of which waypoints (poses and status are coalesced)
   std::uint64_t waypoints_published = 0;
   std::uint64_t requests = 0;
+  std::uint64_t evicted = 0;                   // sessions closed to make room for a new connection
+  std::uint64_t hello_timeouts = 0;            // closed: no complete request within hello_timeout
+  std::uint64_t idle_timeouts = 0;             // closed: no request within idle_timeout
+  std::uint64_t auth_failures = 0;             // failed authentication attempts
+  std::uint64_t auth_throttled = 0;            // attempts refused while their peer address had to wait
+  std::uint64_t queued_bytes = 0;              // unsent response and batch bytes of all clients now
+  std::uint64_t max_session_queued_bytes = 0;  // the most any one client had queued, since start
 };
 
 // Lifecycle: construct, listen(), run the io_context (one thread), publish*() from any thread,

@@ -18,12 +18,22 @@ class OcTree;
 
 namespace vog::v1 {
 class MapDelta;
-}
+class VoxelBlock;
+class BlockKey;
+}  // namespace vog::v1
 
 namespace vog::api {
 
 // Everything changed after `since_version` (0 = the whole map) in `snapshot`.
 v1::MapDelta encodeMapDelta(const map::MergedMap& snapshot, std::uint64_t since_version);
+
+// The parts of encodeMapDelta, for transfers that encode a delta a few blocks at a time: the grid,
+// versions and submap count (no blocks); one changed block (`origin` is the key of its voxel 0); one
+// removed block's key.
+void encodeDeltaHeader(const map::MergedMap& snapshot, std::uint64_t since_version, v1::MapDelta& delta);
+void encodeBlock(const map::LogOddsBounds& bounds, const map::VoxelKey& origin, const map::MergedMap::Block& block,
+                 v1::VoxelBlock& out);
+void encodeRemoved(const map::VoxelKey& origin, v1::BlockKey& out);
 
 // A client's copy of the merged map, kept up to date from deltas.
 // Lifecycle: empty at version 0; each applied delta must start at the mirror's version.

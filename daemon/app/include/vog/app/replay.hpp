@@ -6,7 +6,8 @@
 // the mission ran with, a mission that ran without interruption gives the same submaps bit for bit
 // (the mapping side depends only on its inputs). A mission resumed after a crash does not: its submap
 // that was open at the crash was lost live but is rebuilt in the replay, and a device run's decoder
-// started afresh live where the replay's goes on.
+// started afresh live where the replay's goes on. A raw log whose oldest segments were dropped (its
+// cap, raw_log.hpp) replays what is left, from the gate record each segment starts with.
 
 #include "vog/app/vogd_config.hpp"
 #include "vog/core/result.hpp"
@@ -23,6 +24,7 @@ struct ReplayStats {
   std::uint64_t not_mapped = 0;       // scans outside a mission (the mapping gate, as live)
   std::size_t submaps = 0;
   std::size_t closures = 0;
+  std::uint64_t dropped_segments = 0;  // oldest raw log segments dropped while recording (not replayed)
 };
 
 // OUT must not hold a mission yet.

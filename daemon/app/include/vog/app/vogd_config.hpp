@@ -4,6 +4,7 @@
 // allowed range (ConfigReader); each component's own validate() runs afterwards for cross-field rules.
 
 #include "vog/app/device_feed.hpp"
+#include "vog/api/api_server.hpp"
 #include "vog/app/waypoint_follower.hpp"
 #include "vog/core/result.hpp"
 #include "vog/io/can.hpp"
@@ -35,6 +36,10 @@ struct MissionSection {
   std::string name = "current";  // this mission's folder in `directory`; an existing one is resumed
   bool start_on_launch = false;  // start exploring as soon as navigation is up (simulator runs)
   int max_submaps = 156;         // submap budget (thesis Table 4.2); reaching it sends the vehicle home
+  // Cap of the raw device log (raw_log.hpp): its oldest segments are dropped beyond it.
+  std::uint64_t raw_log_max_bytes = std::uint64_t{2} << 30;
+  // Where the folder is set, for errors about it: "file:line: mission.directory" (or mission.name).
+  std::string directory_setting = "mission.directory";
 };
 
 struct SimSection {
@@ -67,13 +72,12 @@ struct DevicesSection {
 };
 
 struct ApiSection {
-  std::string bind_address = "127.0.0.1";
+  std::string bind_address = "127.0.0.1";  // an IPv4 or IPv6 address
   std::uint16_t port = 29600;
-  std::uint32_t max_frame_bytes = 4u << 20;
-  int max_clients = 64;
-  std::filesystem::path secret_file;           // operator shared secret; empty: operator role disabled
-  std::filesystem::path tls_certificate_file;  // PEM chain; set: every client speaks TLS
-  std::filesystem::path tls_private_key_file;  // PEM
+  std::filesystem::path secret_file;  // operator shared secret (readSecretFile); empty: operator role disabled
+  // Every other setting of the server (keys api.*, api.tls.*): limits, timeouts, chunk sizes, the TLS
+  // files. Its operator_secret stays empty here: vogd reads secret_file when it starts.
+  api::ApiServerConfig server;
 };
 
 struct VogdConfig {
@@ -92,9 +96,20 @@ struct VogdConfig {
 };
 
 // Reads, range-checks and validates a configuration file. Relative paths in it are resolved against
-// the file's folder.
+// the file's folder. The files it names are checked as vogd will use them: the operator secret
+// (readSecretFile), the TLS certificate and key (api::makeTlsContext), the simulator's scene.
 Result<VogdConfig> loadVogdConfig(const std::filesystem::path& file);
 Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& source_name,
                                    const std::filesystem::path& base_dir);
+
+// The operator secret of api.secret_file, as ssh treats a private key: refused when it is not a
+// regular file, holds fewer than 16 or more than 4096 bytes (trailing line breaks not counted), or
+// is accessible by group or others (the error names the mode and `chmod 600`).
+Result<std::string> readSecretFile(const std::filesystem::path& file);
+
+// Whether vogd can open `dir` as its mission folder: an existing one must be a directory it can
+// write to; a missing one must be creatable (its nearest existing ancestor a directory it can write
+// to). Writes and removes one probe file; creates nothing. Errors start with `setting`.
+Status checkMissionDirectory(const std::filesystem::path& dir, const std::string& setting);
 
 }  // namespace vog::app

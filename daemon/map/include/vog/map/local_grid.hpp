@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace octomap {
@@ -89,6 +90,12 @@ class LocalGrid {
   template <class F>
   void forEachLeaf(F&& f) const;
 
+  // The tree in OctoMap's .ot format. OctoMap's own writer reports success whatever its stream did, so
+  // the bytes are made in memory and written by save() (or the caller) with every write checked.
+  Result<std::string> serialize() const;
+  // Writes serialize() atomically (writeFileAtomically: each write, the fsync, the rename and the
+  // directory fsync checked); a full disk or any failed write is an error naming the file and leaves
+  // no file of that name behind that was not there before.
   Status save(const std::filesystem::path& ot_file) const;
 
  private:

@@ -118,6 +118,9 @@ class Journal {
   Status sync() { return writer_->sync(); }
   // Drops every record at or after `offset` (a JournalEntry::offset).
   Status truncate(std::uint64_t offset) { return writer_->truncate(offset); }
+  // Forgets the records after `size_bytes` (an earlier sizeBytes()) and clears a write failure
+  // (RecordWriter::rollback), so that they can be appended again.
+  Status rollback(std::uint64_t size_bytes) { return writer_->rollback(size_bytes); }
   std::uint64_t sizeBytes() const { return writer_->sizeBytes(); }
 
  private:

@@ -17,7 +17,6 @@
 #include "vog/core/result.hpp"
 
 #include <cstdint>
-#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -56,10 +55,12 @@ std::vector<std::uint8_t> encodeFrame(std::span<const std::uint8_t> payload);
 
 // Appends frames to one file.
 // Lifecycle: open() creates the file (and fsyncs its directory) or reads the existing frames, truncates
-// a torn tail and positions at the end; append() buffers (64 KiB stdio buffer), sync() = fflush +
-// fsync; the destructor flushes without fsync. Invariants: the file always holds whole frames up to the
-// last sync(); after a failed write the writer refuses further appends (reopen to recover). Not
-// thread-safe: the owner serialises calls.
+// a torn tail and positions at the end; append() buffers (64 KiB), sync() writes the buffer and fsyncs;
+// the destructor writes the buffer without fsync. Every write(2) and fsync is checked. Invariants: the
+// file always holds whole frames up to the last sync(); after a failed write (e.g. a full disk) the
+// writer refuses further appends until rollback() to a frame boundary, which drops what came after it
+// from the buffer and the file, so that the same frames can be written again. Not thread-safe: the
+// owner serialises calls.
 class RecordWriter {
  public:
   // `existing` (optional) receives the frames already in the file and what recovery did.
@@ -70,22 +71,28 @@ class RecordWriter {
 
   Status append(std::span<const std::uint8_t> payload);
   Status sync();
-  // Flushes, then cuts the file to `size_bytes` (which the caller knows to be a frame boundary, e.g.
-  // FramedRecord::offset) and fsyncs. Used to drop an uncommitted group of records on resume.
+  // Writes the buffer, then cuts the file to `size_bytes` (which the caller knows to be a frame
+  // boundary, e.g. FramedRecord::offset) and fsyncs. Used to drop an uncommitted group of records on resume.
   Status truncate(std::uint64_t size_bytes);
+  // Forgets every frame after `size_bytes` (a frame boundary, e.g. an earlier sizeBytes()) whether it is
+  // buffered or already in the file, and clears an earlier write failure. Needs no free space.
+  Status rollback(std::uint64_t size_bytes);
   std::uint64_t sizeBytes() const { return size_bytes_; }  // including buffered frames
   const std::filesystem::path& path() const { return path_; }
 
  private:
-  RecordWriter(std::filesystem::path path, std::FILE* file, std::uint64_t size_bytes)
-      : path_(std::move(path)), file_(file), size_bytes_(size_bytes) {}
+  static constexpr std::size_t kBufferBytes = 64 * 1024;
+  RecordWriter(std::filesystem::path path, int fd, std::uint64_t size_bytes)
+      : path_(std::move(path)), fd_(fd), size_bytes_(size_bytes), file_bytes_(size_bytes) {}
   Status fail(const std::string& what);
+  Status writeBuffer(std::size_t bytes);  // the first `bytes` of buffer_
 
   std::filesystem::path path_;
-  std::FILE* file_;
-  std::uint64_t size_bytes_;
+  int fd_;                            // opened O_APPEND
+  std::uint64_t size_bytes_;          // file_bytes_ + buffer_.size()
+  std::uint64_t file_bytes_;          // bytes written to the file
+  std::vector<std::uint8_t> buffer_;  // the frames after file_bytes_
   std::optional<Error> failed_;
-  std::vector<char> stdio_buffer_ = std::vector<char>(64 * 1024);
 };
 
 }  // namespace vog::mission

@@ -1,9 +1,10 @@
 #pragma once
 // SubmapStore: the closed submaps of a mission as OctoMap files, `submaps/NNNNNN.ot` (index, six
-// digits, zero-padded) under the mission directory. A file is written atomically (writeFileAtomically:
-// a temporary file next to it, fsync'ed, renamed and the directory fsync'ed), so that a file under its
-// final name is always complete; the journal record naming it (with its size and CRC-32C) is synced
-// only after that.
+// digits, zero-padded) under the mission directory. A file is serialised in memory, written atomically
+// (writeFileAtomically: a temporary file next to it, every write checked, fsync'ed, renamed and the
+// directory fsync'ed) and read back against the size and CRC-32C of the bytes meant to be written, so
+// that write() succeeds only for a complete file; the journal record naming it (with that size and
+// CRC-32C) is synced only after that.
 //
 // Lifecycle: open() creates submaps/ if needed; write() and read() may be called in any order.
 // Stateless apart from the directory path, so safe to use from one thread at a time.
@@ -37,6 +38,8 @@ class SubmapStore {
   const std::filesystem::path& dir() const { return dir_; }
 
  private:
+  // The file at `path` has the size and CRC-32C of `file` (an error naming what differs otherwise).
+  static Status verify(const std::filesystem::path& path, const StoredSubmapFile& file);
   explicit SubmapStore(std::filesystem::path dir) : dir_(std::move(dir)) {}
   std::filesystem::path dir_;  // <mission>/submaps
 };
