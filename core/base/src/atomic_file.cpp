@@ -27,16 +27,6 @@ Status commit(const std::filesystem::path& tmp, const std::filesystem::path& fil
   return syncDirectory(dir.empty() ? std::filesystem::path(".") : dir);
 }
 
-Status syncFile(const std::filesystem::path& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Error{"cannot reopen " + path.string() + ": " + errnoText()};
-  const int rc = ::fsync(fd);
-  const std::string err = rc != 0 ? errnoText() : std::string();
-  ::close(fd);
-  if (rc != 0) return Error{"cannot fsync " + path.string() + ": " + err};
-  return Status::success();
-}
-
 }  // namespace
 
 Status writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
@@ -55,14 +45,6 @@ Status writeFileAtomically(const std::filesystem::path& file, std::string_view b
   if (failed.empty() && ::fsync(fd) != 0) failed = "cannot fsync " + tmp.string() + ": " + errnoText();
   if (::close(fd) != 0 && failed.empty()) failed = "error while closing " + tmp.string() + ": " + errnoText();
   return commit(tmp, file, failed.empty() ? Status::success() : Status(Error{failed}));
-}
-
-Status writeFileAtomically(const std::filesystem::path& file,
-                           const std::function<Status(const std::filesystem::path& tmp)>& write) {
-  const std::filesystem::path tmp = temporaryName(file);
-  Status written = write(tmp);
-  if (written.ok()) written = syncFile(tmp);
-  return commit(tmp, file, std::move(written));
 }
 
 Status syncDirectory(const std::filesystem::path& dir) {

@@ -1,5 +1,6 @@
 #include "vog/api/map_delta.hpp"
 
+#include "vog/map/octree_file.hpp"
 #include "vog/v1/map.pb.h"
 
 #include <octomap/OcTree.h>
@@ -158,15 +159,13 @@ Result<std::unique_ptr<octomap::OcTree>> MapMirror::toOcTree() const {
 Status MapMirror::writeOt(const std::filesystem::path& file) const {
   auto tree = toOcTree();
   if (!tree) return tree.error();
-  if (!(*tree)->write(file.string())) return Error{"cannot write " + file.string()};
-  return {};
+  return map::writeOcTreeFile(**tree, file, map::OcTreeFormat::kFull);
 }
 
 Status MapMirror::writeBt(const std::filesystem::path& file) const {
   auto tree = toOcTree();
   if (!tree) return tree.error();
-  if (!(*tree)->writeBinary(file.string())) return Error{"cannot write " + file.string()};
-  return {};
+  return map::writeOcTreeFile(**tree, file, map::OcTreeFormat::kBinary);
 }
 
 }  // namespace vog::api

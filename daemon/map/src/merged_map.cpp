@@ -1,5 +1,7 @@
 #include "vog/map/merged_map.hpp"
 
+#include "vog/map/octree_file.hpp"
+
 #include <octomap/OcTree.h>
 
 #include <atomic>
@@ -297,14 +299,11 @@ std::unique_ptr<octomap::OcTree> MergedMap::toOcTree() const {
 }
 
 Status MergedMap::writeOt(const std::filesystem::path& file) const {
-  if (!toOcTree()->write(file.string())) return Error{"cannot write " + file.string()};
-  return {};
+  return writeOcTreeFile(*toOcTree(), file, OcTreeFormat::kFull);
 }
 
 Status MergedMap::writeBt(const std::filesystem::path& file) const {
-  auto tree = toOcTree();
-  if (!tree->writeBinary(file.string())) return Error{"cannot write " + file.string()};
-  return {};
+  return writeOcTreeFile(*toOcTree(), file, OcTreeFormat::kBinary);
 }
 
 }  // namespace vog::map

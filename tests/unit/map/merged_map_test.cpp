@@ -1,6 +1,7 @@
 #include "vog/map/merged_map.hpp"
 
 #include "map_fixtures.hpp"
+#include "small_tmpfs.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -259,6 +260,20 @@ TEST_F(MergedMapTest, ExportsOctoMapFilesWithTheClampedValues) {
   });
   EXPECT_EQ(n, merged->knownVoxelCount());
   EXPECT_FALSE(merged->writeOt(dir.path() / "no" / "such" / "dir.ot").ok());
+}
+
+TEST_F(MergedMapTest, AnExportOnAFullDiskIsAnErrorAndLeavesNoFile) {
+  auto merged = mergeFromScratch();
+  test::SmallTmpfs disk(256 * 1024);
+  if (!disk.mounted()) GTEST_SKIP() << "needs a tmpfs to fill: " << disk.error();
+  ASSERT_TRUE(disk.fill());
+  for (const char* name : {"map.ot", "map.bt"}) {
+    const auto file = disk.path() / name;
+    const Status written = std::string(name) == "map.ot" ? merged->writeOt(file) : merged->writeBt(file);
+    ASSERT_FALSE(written.ok()) << name << " reported written on a full disk";
+    EXPECT_NE(written.error().message.find("No space left on device"), std::string::npos) << written.error().message;
+    EXPECT_FALSE(std::filesystem::exists(file));
+  }
 }
 
 TEST(MergedMapInput, RejectsBadSubmapsAndChangesNothing) {

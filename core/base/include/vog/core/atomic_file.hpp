@@ -4,22 +4,17 @@
 // to it (`<name>.tmp.<pid>`), which is fsync'ed and renamed over the file; then the directory is
 // fsync'ed so that the rename itself is durable. Errors name the file and the failed step; the
 // temporary file is removed on failure. Used for every file written in one piece (PNG, PLY, the
-// endpoints file, the mission's submap files).
+// endpoints file, the mission's submap files, map exports). Libraries that write by file name (OctoMap)
+// are given a memory stream instead: their writers do not report a failed write.
 
 #include "vog/core/result.hpp"
 
 #include <filesystem>
-#include <functional>
 #include <string_view>
 
 namespace vog {
 
 Status writeFileAtomically(const std::filesystem::path& file, std::string_view bytes);
-
-// For content that another library writes by file name (an OctoMap tree): `write` creates the
-// temporary file it is given; the rest is as above.
-Status writeFileAtomically(const std::filesystem::path& file,
-                           const std::function<Status(const std::filesystem::path& tmp)>& write);
 
 // fsync of a directory, so that a created or renamed entry in it is durable.
 Status syncDirectory(const std::filesystem::path& dir);
