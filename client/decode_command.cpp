@@ -41,8 +41,8 @@ struct Printer {
     if (json) {
       JsonLine line;
       line.add("type", r.kind);
-      for (const auto& [key, value] : r.fields) {
-        std::visit([&line, &key](const auto& v) { line.add(key, v); }, value);
+      for (const auto& field : r.fields) {
+        std::visit([&line, &field](const auto& v) { line.add(field.first, v); }, field.second);
       }
       std::cout << line.str() << '\n';
       return;

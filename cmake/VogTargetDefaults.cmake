@@ -1,9 +1,14 @@
 # Language standard, warnings and sanitizers for every target of the project, in one place.
 # Warnings are PRIVATE: a consumer never inherits our warning policy.
 
-if(VOG_SANITIZE)
+if(VOG_SANITIZER STREQUAL "address")
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=address,undefined)
+elseif(VOG_SANITIZER STREQUAL "thread")
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
+elseif(NOT VOG_SANITIZER STREQUAL "")
+  message(FATAL_ERROR "VOG_SANITIZER: '${VOG_SANITIZER}' is not address, thread or empty")
 endif()
 
 function(vog_target_defaults target)

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <optional>
+#include <thread>
 
 namespace vog::client {
 
@@ -424,6 +425,18 @@ Status ApiClient::fetchMap(api::MapMirror& mirror, const ProgressFn& progress, s
 }
 
 Result<api::Cloud> ApiClient::cloud(const ProgressFn& progress) {
+  // vogd builds a reconstruction once one is asked for: the first request after a new map may be
+  // answered UNAVAILABLE for a moment. Ask again for a while before giving up.
+  const Clock::time_point give_up = Clock::now() + std::chrono::seconds(5);
+  for (;;) {
+    last_server_error_ = {};
+    auto cloud = cloudOnce(progress);
+    if (cloud || last_server_error_.code != v1::ERROR_CODE_UNAVAILABLE || Clock::now() >= give_up) return cloud;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+}
+
+Result<api::Cloud> ApiClient::cloudOnce(const ProgressFn& progress) {
   v1::Envelope req;
   req.mutable_get_cloud();
   api::Cloud out;

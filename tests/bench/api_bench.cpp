@@ -76,7 +76,7 @@ class BenchBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return map_; }
   std::vector<api::SubmapInfo> submaps() const override { return {}; }
-  std::shared_ptr<const api::Cloud> cloud() const override { return nullptr; }
+  std::shared_ptr<const api::ServedCloud> cloud() const override { return nullptr; }
   Result<api::MissionState> command(const api::MissionCommand& c) override {
     state_ = c.kind == api::MissionCommand::Kind::kPause ? api::MissionState::kPaused : api::MissionState::kExploring;
     return state_.load();

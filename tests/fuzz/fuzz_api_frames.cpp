@@ -31,8 +31,8 @@ class FuzzBackend final : public api::ApiBackend {
     entry.grid = std::move(grid);
     (void)merged_->add(entry);
     snapshot_ = merged_->snapshot();
-    auto cloud = std::make_shared<api::Cloud>();
-    for (int i = 0; i < 100; ++i) cloud->push_back({Eigen::Vector3f(0.1f * static_cast<float>(i), 0, 0), {}});
+    auto cloud = std::make_shared<api::ServedCloud>();
+    for (int i = 0; i < 100; ++i) cloud->points.push_back({Eigen::Vector3f(0.1f * static_cast<float>(i), 0, 0), {}});
     cloud_ = cloud;
   }
   api::StatusReport status() const override {
@@ -42,7 +42,7 @@ class FuzzBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return snapshot_; }
   std::vector<api::SubmapInfo> submaps() const override { return {api::SubmapInfo{}}; }
-  std::shared_ptr<const api::Cloud> cloud() const override { return cloud_; }
+  std::shared_ptr<const api::ServedCloud> cloud() const override { return cloud_; }
   Result<api::MissionState> command(const api::MissionCommand& c) override {
     if (c.kind == api::MissionCommand::Kind::kSetBox) VOG_FUZZ_CHECK(c.box.validate().ok());
     if (c.kind == api::MissionCommand::Kind::kResume) return Error{"resume while idle"};
@@ -53,7 +53,7 @@ class FuzzBackend final : public api::ApiBackend {
  private:
   std::unique_ptr<map::MergedMap> merged_;
   std::shared_ptr<const map::MergedMap> snapshot_;
-  std::shared_ptr<const api::Cloud> cloud_;
+  std::shared_ptr<const api::ServedCloud> cloud_;
 };
 
 std::vector<std::string> decodeAll(api::FrameDecoder& decoder, bool& failed) {

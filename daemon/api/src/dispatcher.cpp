@@ -95,8 +95,8 @@ class MapChunks final : public ChunkSource {
 
 class CloudChunks final : public ChunkSource {
  public:
-  CloudChunks(std::uint64_t id, std::shared_ptr<const Cloud> cloud, std::size_t points_per_chunk)
-      : id_(id), cloud_(std::move(cloud)), per_chunk_(points_per_chunk) {
+  CloudChunks(std::uint64_t id, std::shared_ptr<const ServedCloud> served, std::size_t points_per_chunk)
+      : id_(id), served_(std::move(served)), cloud_(&served_->points), per_chunk_(points_per_chunk) {
     count_ = std::max<std::size_t>(1, (cloud_->size() + per_chunk_ - 1) / per_chunk_);
     for (const CloudPoint& p : *cloud_) has_normals_ = has_normals_ || !p.normal_world.isZero();
   }
@@ -111,6 +111,7 @@ class CloudChunks final : public ChunkSource {
     chunk->set_chunk_index(static_cast<std::uint32_t>(index_));
     chunk->set_chunk_count(static_cast<std::uint32_t>(count_));
     chunk->set_points_total(cloud_->size());
+    chunk->set_map_version(served_->map_version);
     const std::size_t begin = index_ * per_chunk_;
     const std::size_t end = std::min(cloud_->size(), begin + per_chunk_);
     chunk->mutable_xyz_m()->Reserve(static_cast<int>(3 * (end - begin)));
@@ -128,7 +129,8 @@ class CloudChunks final : public ChunkSource {
 
  private:
   std::uint64_t id_;
-  std::shared_ptr<const Cloud> cloud_;
+  std::shared_ptr<const ServedCloud> served_;
+  const Cloud* cloud_;  // served_->points
   std::size_t per_chunk_;
   std::size_t count_ = 1;
   std::size_t index_ = 0;
@@ -317,8 +319,11 @@ Reply Dispatcher::map(std::uint64_t id, const v1::GetMap& request) {
 }
 
 Reply Dispatcher::cloud(std::uint64_t id, const v1::GetCloud& request) {
-  std::shared_ptr<const Cloud> cloud = backend_.cloud();
-  if (!cloud) return errorReply(id, v1::ERROR_CODE_UNAVAILABLE, "no reconstruction yet");
+  std::shared_ptr<const ServedCloud> cloud = backend_.cloud();
+  if (!cloud) {
+    return errorReply(id, v1::ERROR_CODE_UNAVAILABLE,
+                      "no reconstruction yet (the first one is built once asked for: ask again in a moment)");
+  }
   const std::size_t max_points = (config_.max_frame_bytes - kChunkHeaderReserveBytes) / kMaxPointWireBytes;
   std::size_t per_chunk =
       request.max_points_per_chunk() == 0 ? config_.cloud_points_per_chunk : request.max_points_per_chunk();

@@ -271,8 +271,19 @@ void Daemon::recordStateLocked(mission::MissionState state) {
                      state == mission::MissionState::kPaused;
   spdlog::info("mission: {}{}", mission::toString(state),
                state == mission::MissionState::kAborted ? " (" + mission_.reason() + ")" : std::string());
-  if (auto st = store_->onState({odometry_.stamp_ns, state}); !st)
-    spdlog::error("mission store: {}", st.error().message);
+  const std::lock_guard queue(journal_queue_mutex_);
+  journal_queue_.push_back({odometry_.stamp_ns, state});
+}
+
+void Daemon::journalStates() {
+  const std::lock_guard writer(journal_write_mutex_);
+  std::vector<mission::MissionStateRecord> records;
+  {
+    const std::lock_guard queue(journal_queue_mutex_);
+    records.swap(journal_queue_);
+  }
+  for (const mission::MissionStateRecord& r : records)
+    if (auto st = store_->onState(r); !st) spdlog::error("mission store: {}", st.error().message);
 }
 
 void Daemon::applyEventLocked(mission::MissionEvent event, const std::string& reason) {
@@ -305,6 +316,7 @@ std::shared_ptr<const map::MergedMap> Daemon::planningSnapshot() {
 void Daemon::planningLoop() {
   while (!stopping_) {
     ++planning_beat_;
+    journalStates();  // what the last step decided (every path of the loop comes back here)
     bool start_now = false, hold_now = false, returning = false;
     std::uint64_t commands = 0;
     mission::Box box;
@@ -430,6 +442,17 @@ Status Daemon::run() {
     spdlog::info("signal {}: stopping", signal);
     requestStop();
   });
+  // SIGHUP (a closed terminal, `systemctl reload`, `kill -HUP`) would end the process without a word
+  // and lose the active submap: it is logged and ignored. The configuration is read at start only.
+  asio::signal_set hangups(io_, SIGHUP);
+  std::function<void()> ignoreHangups = [&] {
+    hangups.async_wait([&](const std::error_code& ec, int) {
+      if (ec) return;
+      spdlog::warn("SIGHUP ignored: vogd reads its configuration at start only (restart it to apply a change)");
+      ignoreHangups();
+    });
+  };
+  ignoreHangups();
   asio::steady_timer beat(io_);
   std::function<void()> tick = [&] {
     ++io_beat_;
@@ -456,6 +479,7 @@ Status Daemon::run() {
       }
     }
   }
+  journalStates();
   notifier_.ready("mission " + std::string(mission::toString(mission_.state())));
 
   // Watchdog: WATCHDOG=1 only while every thread has beaten within the limit; a stuck thread lets
@@ -500,6 +524,7 @@ Status Daemon::run() {
       }
       for (const map::MergeRecord& m : merges) telemetry_->merge(stamp_ns, m);
     }
+    cloud_.update(merge_->snapshot());  // only when a client asked for a cloud since
     if (now - last_pose >= std::chrono::milliseconds(200)) {
       api::PoseUpdate p;
       {
@@ -527,6 +552,7 @@ Status Daemon::run() {
   planner_cv_.notify_all();
   source_->stop();
   if (planning_thread_.joinable()) planning_thread_.join();
+  journalStates();  // the planning thread's last decision
   if (mapping_thread_.joinable()) mapping_thread_.join();
   merge_->stop();
   api_->stop();  // posts the closing of every session; the io thread stops after it ran
@@ -565,7 +591,7 @@ std::shared_ptr<const map::MergedMap> Daemon::mapSnapshot() const { return merge
 
 std::vector<api::SubmapInfo> Daemon::submaps() const { return mapping_->state()->submaps; }
 
-std::shared_ptr<const api::Cloud> Daemon::cloud() const { return cloud_.of(merge_->snapshot()); }
+std::shared_ptr<const api::ServedCloud> Daemon::cloud() const { return cloud_.latest(); }
 
 Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
   std::optional<mission::Box> box;
@@ -595,6 +621,7 @@ Result<api::MissionState> Daemon::command(const api::MissionCommand& command) {
     recordStateLocked(*r);
     out = toApi(*r);
   }
+  journalStates();  // durable before the reply says the command was done
   if (hold) (void)source_->setWaypoints({});
   planner_cv_.notify_all();
   return out;

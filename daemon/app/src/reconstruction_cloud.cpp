@@ -4,28 +4,30 @@
 
 namespace vog::app {
 
-std::shared_ptr<const api::Cloud> ReconstructionCloud::of(const std::shared_ptr<const map::MergedMap>& snapshot) {
-  if (!snapshot) return nullptr;
+std::shared_ptr<const api::ServedCloud> ReconstructionCloud::latest() {
+  const std::lock_guard lock(mutex_);
+  wanted_ = true;
+  return cloud_;
+}
+
+void ReconstructionCloud::update(const std::shared_ptr<const map::MergedMap>& snapshot) {
+  if (!snapshot) return;
   {
     const std::lock_guard lock(mutex_);
-    if (cloud_ && version_ == snapshot->version()) return cloud_;
+    if (!wanted_ || (cloud_ && cloud_->map_version == snapshot->version())) return;
+    wanted_ = false;
   }
-  auto cloud = std::make_shared<api::Cloud>();
+  auto cloud = std::make_shared<api::ServedCloud>();
+  cloud->map_version = snapshot->version();
   const double res = snapshot->resolution();
   snapshot->forEachKnown([&](const map::VoxelKey& key, const map::VoxelValue& value) {
     if (value.status != map::Occupancy::kOccupied) return;
     api::CloudPoint p;
     p.p_world_m = map::keyToCentre(key, res).cast<float>();
-    cloud->push_back(p);
+    cloud->points.push_back(p);
   });
   const std::lock_guard lock(mutex_);
-  // Two clients may build the same version at once; the newer version is kept.
-  if (!cloud_ || snapshot->version() >= version_) {
-    cloud_ = std::move(cloud);
-    version_ = snapshot->version();
-    return cloud_;
-  }
-  return cloud;
+  cloud_ = std::move(cloud);
 }
 
 }  // namespace vog::app

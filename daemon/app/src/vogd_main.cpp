@@ -101,9 +101,11 @@ int main(int argc, char** argv) {
     spdlog::error("{}", daemon.error().message);
     return 2;
   }
-  if (auto st = (*daemon)->run(); !st) {
-    spdlog::error("stopped: {}", st.error().message);
-    return 1;
-  }
-  return 0;
+  const vog::Status stopped = (*daemon)->run();
+  if (!stopped) spdlog::error("stopped: {}", stopped.error().message);
+  // run() returned with every thread joined and the mission durable (the active submap stored, the
+  // journal synced). Freeing the mission's memory (every submap's tree: seconds for a long mission)
+  // would only delay the exit systemd waits for; the process ends without it.
+  spdlog::shutdown();
+  std::_Exit(stopped ? 0 : 1);
 }

@@ -20,6 +20,7 @@ MergeWorker::MergeWorker(std::unique_ptr<MergedMap> merged, const MergeConfig& m
 MergeWorker::~MergeWorker() { stop(); }
 
 void MergeWorker::stop() {
+  cancel_ = true;
   {
     const std::lock_guard lock(mutex_);
     stopping_ = true;
@@ -87,13 +88,15 @@ void MergeWorker::run() {
     lock.unlock();
 
     const auto t0 = std::chrono::steady_clock::now();
-    auto stats = merged_->sync(entries, config_);
+    // A shutdown does not wait for a whole re-merge: the merged map is rebuilt from the submaps on resume.
+    auto stats = merged_->sync(entries, config_, [this] { return cancel_.load(); });
     std::shared_ptr<const MergedMap> snapshot;
     if (stats) snapshot = merged_->snapshot();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
     lock.lock();
     ++heartbeat_;
+    if (stopping_) return;  // cancelled, or finished after stop(): nothing more is published
     if (!stats) {
       error_ = Error{"merge of submap set " + std::to_string(sequence) + ": " + stats.error().message};
     } else {

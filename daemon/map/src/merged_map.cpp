@@ -130,7 +130,10 @@ Status MergedMap::remove(SubmapId id) {
   return {};
 }
 
-Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config) {
+Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config,
+                                  const std::function<bool()>& cancelled) {
+  const auto stop = [&] { return cancelled && cancelled(); };
+  const Error cancel_error{"merge: cancelled"};
   if (auto s = config.validate(); !s) return s.error();
   // Validate everything before changing anything.
   std::map<SubmapId, const SubmapEntry*> wanted;
@@ -148,10 +151,12 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     if (wanted.count(id) == 0) gone.push_back(id);
   }
   for (SubmapId id : gone) {
+    if (stop()) return cancel_error;
     (void)remove(id);
     ++stats.removed;
   }
   for (const auto& e : entries) {
+    if (stop()) return cancel_error;
     const auto it = merged_.find(e.id);
     if (it == merged_.end()) {
       if (auto s = add(e); !s) return s.error();
@@ -212,9 +217,14 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
             auto& slot = blocks_.slot(packed);
             if (!slot) {
               slot = std::make_shared<Block>();
+              slot->generation = generation_;
               removed_.erase(packed);
-            } else if (slot.use_count() > 1) {
-              slot = std::make_shared<Block>(*slot);  // a snapshot holds it: copy on write
+            } else if (slot->generation != generation_) {
+              // A snapshot taken since the block was made may hold it: copy on write. (Not use_count():
+              // a reader dropping its snapshot is a relaxed decrement that orders nothing against its
+              // last reads of the block.)
+              slot = std::make_shared<Block>(*slot);
+              slot->generation = generation_;
             }
             block = slot.get();
             block->version = version_;
@@ -240,7 +250,10 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
   }
 }
 
-std::shared_ptr<const MergedMap> MergedMap::snapshot() const { return std::make_shared<const MergedMap>(*this); }
+std::shared_ptr<const MergedMap> MergedMap::snapshot() {
+  ++generation_;  // every block existing now is shared with this snapshot from here on
+  return std::make_shared<const MergedMap>(*this);
+}
 
 std::size_t MergedMap::knownVoxelCount() const {
   std::size_t n = 0;

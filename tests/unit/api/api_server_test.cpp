@@ -125,7 +125,7 @@ TEST_F(ApiServerTest, EveryReadCallRoundTrips) {
 
   std::vector<std::pair<std::uint64_t, std::uint64_t>> progress;
   const Cloud cloud = c->cloud([&](std::uint64_t n, std::uint64_t total) { progress.emplace_back(n, total); }).value();
-  const Cloud& want_cloud = *backend_.cloudData();
+  const Cloud& want_cloud = backend_.cloudData();
   ASSERT_EQ(cloud.size(), want_cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     ASSERT_EQ(cloud[i].p_world_m, want_cloud[i].p_world_m);

@@ -25,8 +25,8 @@ class FakeBackend final : public ApiBackend {
     for (std::size_t i = 0; i < n_initial && i < entries_.size(); ++i) addSubmap(i);
     for (int i = 0; i < 1000; ++i) {
       const float a = static_cast<float>(i) * 0.01f;
-      cloud_->push_back({Eigen::Vector3f(std::cos(a), std::sin(a), -0.001f * static_cast<float>(i)),
-                         Eigen::Vector3f(std::cos(a), std::sin(a), 0.0f)});
+      cloud_->points.push_back({Eigen::Vector3f(std::cos(a), std::sin(a), -0.001f * static_cast<float>(i)),
+                                Eigen::Vector3f(std::cos(a), std::sin(a), 0.0f)});
     }
   }
 
@@ -81,7 +81,7 @@ class FakeBackend final : public ApiBackend {
     return out;
   }
 
-  std::shared_ptr<const Cloud> cloud() const override { return cloud_; }
+  std::shared_ptr<const ServedCloud> cloud() const override { return cloud_; }
 
   // The mission lifecycle; refusals name the state.
   Result<MissionState> command(const MissionCommand& c) override {
@@ -129,7 +129,7 @@ class FakeBackend final : public ApiBackend {
     std::lock_guard lock(mutex_);
     return box_;
   }
-  std::shared_ptr<const Cloud> cloudData() const { return cloud_; }
+  const Cloud& cloudData() const { return cloud_->points; }
 
  private:
   map::GridConfig config_;
@@ -143,7 +143,7 @@ class FakeBackend final : public ApiBackend {
   ExplorationBox box_;                                   // guarded by mutex_
   bool has_box_ = false;                                 // guarded by mutex_
   std::vector<MissionCommand> commands_;                 // guarded by mutex_
-  std::shared_ptr<Cloud> cloud_ = std::make_shared<Cloud>();
+  std::shared_ptr<ServedCloud> cloud_ = std::make_shared<ServedCloud>();
 };
 
 // Records every log line (the server logs from its io thread).

@@ -378,7 +378,7 @@ TEST(MappingStage, AFullDiskIsReportedInTheStorageHealthAndRetried) {
 }
 
 // The cloud is the merged map's occupied voxel centres, built once per map version.
-TEST(ReconstructionCloud, HoldsTheOccupiedVoxelCentresAndIsBuiltOncePerVersion) {
+TEST(ReconstructionCloud, HoldsTheOccupiedVoxelCentresBuiltOnlyWhenAskedAndOncePerVersion) {
   map::GridConfig grid;
   auto merged = map::MergedMap::create(grid).value();
   auto local = map::LocalGrid::create(grid).value();
@@ -395,24 +395,34 @@ TEST(ReconstructionCloud, HoldsTheOccupiedVoxelCentresAndIsBuiltOncePerVersion) 
   const auto snapshot = merged->snapshot();
 
   ReconstructionCloud cloud;
-  EXPECT_EQ(cloud.of(nullptr), nullptr);
-  const auto a = cloud.of(snapshot);
+  cloud.update(snapshot);
+  EXPECT_EQ(cloud.latest(), nullptr) << "nobody asked: nothing is built";
+  cloud.update(nullptr);
+  EXPECT_EQ(cloud.latest(), nullptr);
+  cloud.update(snapshot);  // asked (by the latest() above)
+  const auto a = cloud.latest();
   ASSERT_NE(a, nullptr);
+  EXPECT_EQ(a->map_version, snapshot->version());
   std::size_t occupied = 0;
   const double res = snapshot->resolution();
   snapshot->forEachKnown([&](const map::VoxelKey& key, const map::VoxelValue& v) {
     if (v.status != map::Occupancy::kOccupied) return;
-    ASSERT_LT(occupied, a->size());
-    EXPECT_EQ((*a)[occupied].p_world_m, map::keyToCentre(key, res).cast<float>());
+    ASSERT_LT(occupied, a->points.size());
+    EXPECT_EQ(a->points[occupied].p_world_m, map::keyToCentre(key, res).cast<float>());
     ++occupied;
   });
   EXPECT_GT(occupied, 50u);
-  EXPECT_EQ(a->size(), occupied);
-  EXPECT_EQ(cloud.of(snapshot), a) << "the same version is served from the cache";
+  EXPECT_EQ(a->points.size(), occupied);
+  cloud.update(snapshot);
+  EXPECT_EQ(cloud.latest(), a) << "the same version is not built twice";
   ASSERT_TRUE(merged->remove(0).ok());
-  const auto b = cloud.of(merged->snapshot());
+  const auto newer = merged->snapshot();
+  EXPECT_EQ(cloud.latest(), a) << "until the builder runs, the newest built cloud is served";
+  cloud.update(newer);
+  const auto b = cloud.latest();
   EXPECT_NE(b, a);
-  EXPECT_TRUE(b->empty());
+  EXPECT_EQ(b->map_version, newer->version());
+  EXPECT_TRUE(b->points.empty());
 }
 
 }  // namespace

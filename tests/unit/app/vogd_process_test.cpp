@@ -1,7 +1,7 @@
 // The vogd executable as systemd runs it: READY and WATCHDOG on the notify socket, kill -9 in the
 // middle of a mission followed by a restart that resumes every closed submap and keeps mapping,
-// SIGTERM answered by STOPPING and a clean exit within 2 s, and --check-config (ExecStartPre)
-// refusing what vogd would refuse.
+// SIGHUP logged and ignored, SIGTERM answered by STOPPING and a clean exit within 2 s, and --check-config
+// (ExecStartPre) refusing what vogd would refuse.
 #include "vog/client/api_client.hpp"
 
 #include "subprocess.hpp"
@@ -121,6 +121,13 @@ TEST(VogdProcess, NotifiesResumesAfterKillAndStopsOnSigterm) {
     // The mission goes on from where it was: new submaps are mapped after the resume.
     const vog::api::StatusReport later = waitForSubmaps(*c, resumed.n_submaps + 2, 60.0);
     EXPECT_GE(later.n_submaps, resumed.n_submaps + 2) << logText(log);
+    // SIGHUP is logged and ignored: the daemon keeps answering and stops cleanly afterwards.
+    ::kill(vogd.pid(), SIGHUP);
+    const auto hup_end = Clock::now() + std::chrono::seconds(5);
+    while (Clock::now() < hup_end && logText(log).find("SIGHUP ignored") == std::string::npos)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_NE(logText(log).find("SIGHUP ignored"), std::string::npos) << logText(log);
+    EXPECT_TRUE(c->status().ok()) << "vogd did not survive SIGHUP";
     const auto t0 = Clock::now();
     ::kill(vogd.pid(), SIGTERM);
     EXPECT_TRUE(notify.waitFor("STOPPING=1", 2.0));

@@ -44,11 +44,12 @@ class RecordingBackend final : public api::ApiBackend {
                           static_cast<std::int64_t>(i) * 1000 + 999, i == 0});
     }
     snapshot_ = merged_->snapshot();
-    auto cloud = std::make_shared<api::Cloud>();
+    auto cloud = std::make_shared<api::ServedCloud>();
+    cloud->map_version = snapshot_->version();
     for (int i = 0; i < 2500; ++i) {  // more than one chunk at 1000 points per chunk
       const float a = static_cast<float>(i) * 0.013f;
-      cloud->push_back({Eigen::Vector3f(3.0f * std::cos(a), 3.0f * std::sin(a), -0.002f * static_cast<float>(i)),
-                        Eigen::Vector3f(std::cos(a), std::sin(a), 0.0f)});
+      cloud->points.push_back({Eigen::Vector3f(3.0f * std::cos(a), 3.0f * std::sin(a), -0.002f * static_cast<float>(i)),
+                               Eigen::Vector3f(std::cos(a), std::sin(a), 0.0f)});
     }
     cloud_ = cloud;
   }
@@ -66,7 +67,7 @@ class RecordingBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return snapshot_; }
   std::vector<api::SubmapInfo> submaps() const override { return submaps_; }
-  std::shared_ptr<const api::Cloud> cloud() const override {
+  std::shared_ptr<const api::ServedCloud> cloud() const override {
     std::lock_guard lock(mutex_);
     return cloud_;
   }
@@ -92,7 +93,7 @@ class RecordingBackend final : public api::ApiBackend {
     std::lock_guard lock(mutex_);
     return commands_;
   }
-  void setCloud(std::shared_ptr<const api::Cloud> cloud) {
+  void setCloud(std::shared_ptr<const api::ServedCloud> cloud) {
     std::lock_guard lock(mutex_);
     cloud_ = std::move(cloud);
   }
@@ -104,7 +105,7 @@ class RecordingBackend final : public api::ApiBackend {
   std::shared_ptr<const map::MergedMap> snapshot_;
   std::vector<api::SubmapInfo> submaps_;
   mutable std::mutex mutex_;
-  std::shared_ptr<const api::Cloud> cloud_;             // guarded by mutex_
+  std::shared_ptr<const api::ServedCloud> cloud_;       // guarded by mutex_
   api::MissionState state_ = api::MissionState::kIdle;  // guarded by mutex_
   std::vector<api::MissionCommand> commands_;           // guarded by mutex_
 };
@@ -188,7 +189,7 @@ TEST_F(VogctlTest, CloudWritesABinaryPlyThatParsesBackToTheBackendsCloudExactly)
   const auto ply = test::decodePly(test::readFile(path("c.ply")));
   ASSERT_EQ(ply.error, "");
   EXPECT_EQ(ply.properties, (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz"}));
-  const api::Cloud& want = *backend_.cloud();
+  const api::Cloud& want = backend_.cloud()->points;
   ASSERT_EQ(ply.vertices.size(), want.size());
   for (std::size_t i = 0; i < want.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
@@ -205,9 +206,9 @@ TEST_F(VogctlTest, CloudWritesABinaryPlyThatParsesBackToTheBackendsCloudExactly)
   EXPECT_NE(r.err.find("cloud: 2500 / 2500 points (100%)"), std::string::npos) << r.err;
 
   // A cloud without normals has x y z only.
-  auto bare = std::make_shared<api::Cloud>();
-  bare->push_back({Eigen::Vector3f(1.5f, -2.25f, 1e-30f), Eigen::Vector3f::Zero()});
-  bare->push_back({Eigen::Vector3f(-0.0f, 3.0e7f, -7.125f), Eigen::Vector3f::Zero()});
+  auto bare = std::make_shared<api::ServedCloud>();
+  bare->points.push_back({Eigen::Vector3f(1.5f, -2.25f, 1e-30f), Eigen::Vector3f::Zero()});
+  bare->points.push_back({Eigen::Vector3f(-0.0f, 3.0e7f, -7.125f), Eigen::Vector3f::Zero()});
   backend_.setCloud(bare);
   const Outcome r2 = vogctl({"cloud", "--out", path("bare.ply")});
   ASSERT_EQ(r2.rc, kExitOk) << r2.err;

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
+#include <mutex>
 #include <thread>
 
 namespace vog::map {
@@ -95,6 +97,57 @@ TEST(Concurrency, SnapshotReadersAreUnaffectedByTheWriter) {
   reader.join();
   EXPECT_EQ(changed.load(), 0);
   EXPECT_TRUE(merged->sameVoxels(*snap));  // same content again, yet the snapshot was never touched
+}
+
+// Readers take a snapshot from the writer's published one, read it and drop it while the writer keeps
+// merging: the writer must never write a block a reader is still reading, whatever order the reader's
+// release and the writer's next write take (under ThreadSanitizer a reference-count test races here).
+TEST(Concurrency, ReadersDroppingSnapshotsWhileTheWriterWritesSeeFixedMaps) {
+  const GridConfig config;
+  const auto built = test_fixtures::buildSubmaps(config, 4, 20, 3, 4.0);
+  std::vector<SubmapEntry> entries;
+  for (std::size_t i = 0; i < built.size(); ++i) {
+    entries.push_back(
+        {static_cast<SubmapId>(i), built[i].grid, built[i].T_world_submap, built[i].T_world_submap.inverse()});
+  }
+  auto merged = MergedMap::create(config).value();
+  ASSERT_TRUE(merged->add(entries[0]).ok());
+  std::mutex published_mutex;
+  std::shared_ptr<const MergedMap> published = merged->snapshot();  // guarded by published_mutex
+  std::atomic<bool> stop{false};
+  std::atomic<int> torn{0}, reads{0};
+  std::vector<std::thread> readers;
+  for (int r = 0; r < 2; ++r) {
+    readers.emplace_back([&] {
+      while (!stop.load()) {
+        std::shared_ptr<const MergedMap> snap;
+        {
+          const std::lock_guard lock(published_mutex);
+          snap = published;
+        }
+        const std::size_t before = snap->knownVoxelCount();
+        double sum = 0.0;
+        snap->forEachKnown([&](const VoxelKey&, const VoxelValue& v) { sum += v.log_odds; });
+        if (snap->knownVoxelCount() != before || !std::isfinite(sum)) ++torn;
+        ++reads;
+        snap.reset();  // dropped while the writer may be about to write its blocks
+      }
+    });
+  }
+  for (int round = 0; round < 40; ++round) {
+    const SubmapEntry& e = entries[1 + static_cast<std::size_t>(round) % (entries.size() - 1)];
+    ASSERT_TRUE(merged->add(e).ok());
+    auto next = merged->snapshot();
+    {
+      const std::lock_guard lock(published_mutex);
+      published = std::move(next);
+    }
+    ASSERT_TRUE(merged->remove(e.id).ok());
+  }
+  while (reads.load() < 20) std::this_thread::yield();
+  stop = true;
+  for (auto& t : readers) t.join();
+  EXPECT_EQ(torn.load(), 0);
 }
 
 }  // namespace

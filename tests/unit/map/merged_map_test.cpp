@@ -314,5 +314,19 @@ TEST(MergedMapInput, RejectsBadSubmapsAndChangesNothing) {
   EXPECT_EQ(merged->query({std::numeric_limits<double>::infinity(), 0, 0}).status, Occupancy::kUnknown);
 }
 
+// A writer that shuts down stops a long re-merge between submaps instead of finishing it.
+TEST_F(MergedMapTest, ASyncIsCancelledBetweenSubmaps) {
+  auto merged = MergedMap::create(config_).value();
+  int asked = 0;
+  const auto entries = vog_->entries();
+  ASSERT_GT(entries.size(), 2u);
+  const auto stats = merged->sync(entries, MergeConfig{}, [&] { return ++asked > 2; });
+  ASSERT_FALSE(stats.ok());
+  EXPECT_EQ(stats.error().message, "merge: cancelled");
+  EXPECT_EQ(merged->submapCount(), 2u);  // two merged, then asked a third time: stopped
+  EXPECT_TRUE(merged->sync(entries, MergeConfig{}, [] { return false; }).ok());
+  EXPECT_EQ(merged->submapCount(), entries.size());
+}
+
 }  // namespace
 }  // namespace vog::map

@@ -76,6 +76,8 @@ class ApiClient {
   Result<api::StatusReport> status();
   Result<api::Subscriptions> subscribe(const api::Subscriptions& subscriptions);
   Result<std::vector<api::SubmapInfo>> submaps();
+  // The reconstruction; asks again for up to 5 s while the server answers UNAVAILABLE (vogd builds
+  // one only once asked for).
   Result<api::Cloud> cloud(const ProgressFn& progress = {});
   Result<api::MissionState> command(const api::MissionCommand& command);
   Result<std::string> configText();
@@ -100,6 +102,7 @@ class ApiClient {
   struct Impl;
 
  private:
+  Result<api::Cloud> cloudOnce(const ProgressFn& progress);
   ApiClient(std::unique_ptr<Impl> impl, ClientConfig config);
   // Sends `request` and returns the response with its id, buffering stream messages meanwhile.
   // An Error frame for this id (or id 0) becomes an Error naming its code.

@@ -67,6 +67,11 @@ struct CloudPoint {
   Eigen::Vector3f normal_world = Eigen::Vector3f::Zero();
 };
 using Cloud = std::vector<CloudPoint>;
+// The reconstruction GetCloud serves: the cloud and the merged map's version it was built from.
+struct ServedCloud {
+  std::uint64_t map_version = 0;
+  Cloud points;
+};
 
 struct Waypoint {
   std::uint64_t seq = 0;  // assigned by ApiServer::publishWaypoint (1, 2, ...)
@@ -122,8 +127,9 @@ class ApiBackend {
   // The newest merged-map snapshot; null while there is no map yet.
   virtual std::shared_ptr<const map::MergedMap> mapSnapshot() const = 0;
   virtual std::vector<SubmapInfo> submaps() const = 0;
-  // The newest reconstruction; null while there is none.
-  virtual std::shared_ptr<const Cloud> cloud() const = 0;
+  // The newest reconstruction built so far (it may lag the newest map version); null while there is
+  // none. Never builds one on the calling (io) thread.
+  virtual std::shared_ptr<const ServedCloud> cloud() const = 0;
   // An operator's command (already authenticated and validated): the mission state after it, or an
   // error saying why the mission refused it (e.g. "start while exploring").
   virtual Result<MissionState> command(const MissionCommand& command) = 0;

@@ -1,6 +1,7 @@
 #pragma once
 // Daemon: vogd's wiring (DESIGN "Threads in vogd"). One process, these threads:
-//   io        Asio io_context: the API server, signals (SIGTERM/SIGINT stop the daemon)
+//   io        Asio io_context: the API server, signals (SIGTERM/SIGINT stop the daemon; SIGHUP is logged
+//             and ignored)
 //   source    the vehicle source producing odometry and scans: SimSource (the simulator) or
 //             DeviceSource (the vehicle's devices on their own io_context; raw bytes to the raw log)
 //   mapping   scans -> MappingPipeline (submaps, loop closures, optimisation); every closed submap is
@@ -9,7 +10,8 @@
 //   planning  the mission's closed loop (explore::ExplorationController: spin, NBV plans on the newest
 //             snapshot, revisits, obstructions, the way home, the ending), the mission state machine
 //             fed by its events; waypoints to the vehicle, the API and the journal
-//   main      run(): systemd notify (READY, WATCHDOG while every thread beats, STOPPING) and status
+//   main      run(): systemd notify (READY, WATCHDOG while every thread beats, STOPPING), status, and
+//             the API's reconstruction cloud when one was asked for
 // Queues: source -> mapping (bounded; the source waits when mapping is behind), mapping -> merge
 // (coalescing), merge -> planning/API (snapshots). Slow API clients never block any of them (the
 // server's per-client queues drop or coalesce).
@@ -79,7 +81,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   api::StatusReport status() const override;
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override;
   std::vector<api::SubmapInfo> submaps() const override;
-  std::shared_ptr<const api::Cloud> cloud() const override;
+  std::shared_ptr<const api::ServedCloud> cloud() const override;
   Result<api::MissionState> command(const api::MissionCommand& command) override;
   std::string configText() const override;
 
@@ -98,8 +100,11 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   geometry::Pose3 estimatedPose(const MappingState& mapped) const;
   geometry::Pose3 mapFromSource() const;  // T_map_source: the source's odometry frame in the map (locks state)
   Status sendWaypoints(const std::vector<plan::Waypoint>& waypoints_map, std::int64_t stamp_ns);
-  // Logs and journals a mission state; the caller holds state_mutex_.
+  // Logs a mission state and queues it for the journal; the caller holds state_mutex_.
   void recordStateLocked(mission::MissionState state);
+  // Writes the queued mission states to the journal (fsync), in the order they were decided; called
+  // without state_mutex_, so the journal's I/O never holds up the threads that take it.
+  void journalStates();
   // Applies an event of the exploration (with its reason for kNoPath), journalling the state when it
   // changed; the caller holds state_mutex_.
   void applyEventLocked(mission::MissionEvent event, const std::string& reason);
@@ -131,7 +136,7 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   std::unique_ptr<api::ApiServer> api_;
 
   ScanQueue scans_{256};               // source -> mapping (its own lock)
-  mutable ReconstructionCloud cloud_;  // the API's cloud (its own lock)
+  mutable ReconstructionCloud cloud_;  // the API's cloud (its own lock; built by the main thread)
 
   // Shared state, guarded by state_mutex_.
   mutable std::mutex state_mutex_;
@@ -145,6 +150,11 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   bool have_odometry_ = false;  // a sample arrived since launch
   OdometrySample odometry_;     // newest, aligned
   std::optional<Error> failure_;
+
+  // Mission states decided under state_mutex_ and not yet journalled (journalStates()).
+  std::mutex journal_queue_mutex_;  // guards journal_queue_; taken inside state_mutex_, never around it
+  std::vector<mission::MissionStateRecord> journal_queue_;
+  std::mutex journal_write_mutex_;  // one writer at a time: records reach the journal in their order
 
   std::unique_ptr<TelemetryFiles> telemetry_;  // iterations.csv (planning thread), merges.csv (main thread)
 

@@ -17,6 +17,7 @@
 #include "vog/map/merged_map.hpp"
 #include "vog/map/vog_map.hpp"
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -77,6 +78,7 @@ class MergeWorker {
   std::optional<Error> error_;                       // guarded by mutex_
   std::uint64_t heartbeat_ = 0;                      // guarded by mutex_
   bool stopping_ = false;                            // guarded by mutex_
+  std::atomic<bool> cancel_{false};                  // set by stop(); read by the merge in progress
   std::thread thread_;
 };
 

@@ -28,6 +28,7 @@
 #include "vog/map/voxel_key.hpp"
 
 #include <array>
+#include <functional>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -69,6 +70,7 @@ class MergedMap {
     std::array<std::int64_t, kBlockVoxels> packed{};  // (fixed-point sum << 16) + count, unclamped
     std::uint32_t n_known = 0;                        // voxels with count > 0
     std::uint64_t version = 0;                        // map version of the last change
+    std::uint64_t generation = 0;  // the writer's snapshot generation the block was made in (writer only)
 
     std::uint32_t count(std::size_t i) const { return static_cast<std::uint32_t>(packed[i] & 0xFFFF); }
     // Unclamped log-odds sum of voxel i.
@@ -86,9 +88,15 @@ class MergedMap {
   Status remove(SubmapId id);
   // Brings the map in line with `entries` (a VogMap's current list): merges new submaps, removes
   // vanished ones, re-merges only submaps whose pose moved beyond the tolerance.
-  Result<SyncStats> sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config);
-  // An immutable copy sharing every block (O(number of blocks) pointer copies).
-  std::shared_ptr<const MergedMap> snapshot() const;
+  // `cancelled`, when given, is asked between submaps: once it says true, sync stops with an error and
+  // leaves the map part-way (for a writer that is shutting down and discards it).
+  Result<SyncStats> sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config,
+                         const std::function<bool()>& cancelled = {});
+  // An immutable copy sharing every block (O(number of blocks) pointer copies). Blocks are shared by
+  // generation: a block made before the newest snapshot is never written again, only copied (the
+  // writer decides alone, with no reference counts read across threads), so a reader may drop or
+  // read its snapshot at any time.
+  std::shared_ptr<const MergedMap> snapshot();
 
   // --- readers ---
   VoxelValue at(const VoxelKey& key) const;
@@ -157,6 +165,7 @@ class MergedMap {
   std::map<SubmapId, SubmapEntry> merged_;                    // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
   std::uint64_t writer_id_ = 0;
+  std::uint64_t generation_ = 0;  // snapshots taken so far (see snapshot())
 };
 
 template <class F>
