@@ -116,6 +116,17 @@ double cpuSeconds() {
 
 // Observers that request the whole map `requests` times each and never read, and one client asking
 // for the status every 20 ms for `duration_s`.
+// The server on loopback at a free port.
+Result<std::pair<std::unique_ptr<api::ApiServer>, std::uint16_t>> serveOnLoopback(asio::io_context& io,
+                                                                                  api::ApiBackend& backend,
+                                                                                  const api::ApiServerConfig& config) {
+  auto server = api::ApiServer::create(io, backend, config);
+  if (!server) return server.error();
+  const auto port = (*server)->listen("127.0.0.1", 0);
+  if (!port) return port.error();
+  return std::make_pair(std::move(server).value(), *port);
+}
+
 int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int requests, double duration_s) {
   BenchBackend backend(map);
   asio::io_context io;
@@ -125,18 +136,15 @@ int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int
   config.max_clients_per_peer = config.max_clients;  // every client is on loopback
   config.max_in_flight = std::max<std::size_t>(config.max_in_flight, static_cast<std::size_t>(requests));
   config.max_queued_responses = std::max(config.max_queued_responses, config.max_in_flight);
-  auto server = api::ApiServer::create(io, backend, config);
-  if (!server) {
-    std::fprintf(stderr, "vog-bench api: %s\n", server.error().message.c_str());
+  auto served = serveOnLoopback(io, backend, config);
+  if (!served) {
+    std::fprintf(stderr, "vog-bench api: %s\n", served.error().message.c_str());
     return 1;
   }
-  const auto port = (*server)->listen("127.0.0.1", 0);
-  if (!port) {
-    std::fprintf(stderr, "vog-bench api: %s\n", port.error().message.c_str());
-    return 1;
-  }
+  const std::unique_ptr<api::ApiServer>& server = served->first;
+  const std::uint16_t port = served->second;
   std::thread io_thread([&] { io.run(); });
-  auto status_client = client::ApiClient::connect("127.0.0.1", *port);
+  auto status_client = client::ApiClient::connect("127.0.0.1", port);
   if (!status_client || !(*status_client)->status().ok()) {
     std::fprintf(stderr, "vog-bench api: the status client cannot connect\n");
     return 1;
@@ -153,7 +161,7 @@ int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int
   std::vector<std::unique_ptr<client::ApiClient>> stalled;
   int failures = 0;
   for (int i = 0; i < observers; ++i) {
-    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    auto c = client::ApiClient::connect("127.0.0.1", port);
     if (!c || !(*c)->sendRaw(bytes).ok()) {
       ++failures;
       continue;
@@ -171,9 +179,9 @@ int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int
     rss_peak_mb = std::max(rss_peak_mb, rssNowMb());
     std::this_thread::sleep_for(20ms);
   }
-  const api::ApiServerStats stats = (*server)->stats();
+  const api::ApiServerStats stats = server->stats();
   stalled.clear();
-  (*server)->stop();
+  server->stop();
   io.stop();
   io_thread.join();
 
@@ -243,16 +251,13 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   api::ApiServerConfig config;
   config.dispatch.operator_secret = vog::bench::kOperatorSecret;
   config.max_clients = static_cast<std::size_t>(observers) + 8;
-  auto server = api::ApiServer::create(io, backend, config);
-  if (!server) {
-    std::fprintf(stderr, "vog-bench api: %s\n", server.error().message.c_str());
+  auto served = serveOnLoopback(io, backend, config);
+  if (!served) {
+    std::fprintf(stderr, "vog-bench api: %s\n", served.error().message.c_str());
     return 1;
   }
-  const auto port = (*server)->listen("127.0.0.1", 0);
-  if (!port) {
-    std::fprintf(stderr, "vog-bench api: %s\n", port.error().message.c_str());
-    return 1;
-  }
+  const std::unique_ptr<api::ApiServer>& server = served->first;
+  const std::uint16_t port = served->second;
   std::thread io_thread([&] { io.run(); });
   const double cpu0 = cpuSeconds();
 
@@ -266,7 +271,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   std::vector<std::thread> threads;
   for (int i = 0; i < observers; ++i) {
     threads.emplace_back([&] {
-      auto c = client::ApiClient::connect("127.0.0.1", *port);
+      auto c = client::ApiClient::connect("127.0.0.1", port);
       if (!c || !(*c)->subscribe({true, true, true}).ok()) {
         ++failures;
         ++ready;
@@ -295,7 +300,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   std::atomic<bool> publishing{true};
   std::atomic<int> commands{0};
   threads.emplace_back([&] {
-    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    auto c = client::ApiClient::connect("127.0.0.1", port);
     if (!c || !(*c)->authenticate(vog::bench::kOperatorSecret).ok()) {
       ++failures;
       ++ready;
@@ -326,12 +331,12 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
     w.stamp_ns = nowNs();
     w.T_world_target = geometry::poseFromXyzRpy(0.01 * i, 1.0, -2.0, 0.0, 0.0, 0.001 * i);
     w.speed_mps = 0.25;
-    (*server)->publishWaypoint(w);
+    server->publishWaypoint(w);
     api::PoseUpdate p;
     p.stamp_ns = w.stamp_ns;
     p.T_world_vehicle = w.T_world_target;
-    (*server)->publishPose(p);
-    if (i % 50 == 0) (*server)->publishStatus(backend.status());
+    server->publishPose(p);
+    if (i % 50 == 0) server->publishStatus(backend.status());
   }
   publishing = false;
   for (auto& t : threads) t.join();
@@ -341,7 +346,7 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
   std::vector<double> snapshot_s;
   std::size_t voxels = 0;
   for (int rep = 0; rep < 3; ++rep) {
-    auto c = client::ApiClient::connect("127.0.0.1", *port);
+    auto c = client::ApiClient::connect("127.0.0.1", port);
     if (!c) {
       std::fprintf(stderr, "vog-bench api: %s\n", c.error().message.c_str());
       return 1;
@@ -361,8 +366,8 @@ VOG_BENCH_COMMAND(api, "API on loopback: waypoint latency to 32 observers + 1 op
       return 1;
     }
   }
-  const api::ApiServerStats stats = (*server)->stats();
-  (*server)->stop();
+  const api::ApiServerStats stats = server->stats();
+  server->stop();
   io.stop();
   io_thread.join();
 

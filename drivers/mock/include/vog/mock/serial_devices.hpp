@@ -29,9 +29,9 @@ class DvlMock {
   FaultInjector& faults() { return faults_; }
 
  private:
-  DvlMock(std::unique_ptr<PtyDevice> pty, std::uint64_t seed) : pty_(std::move(pty)), faults_(seed) {}
-  std::unique_ptr<PtyDevice> pty_;
+  DvlMock(std::unique_ptr<PtyDevice> pty, std::uint64_t seed) : faults_(seed), pty_(std::move(pty)) {}
   FaultInjector faults_;
+  std::unique_ptr<PtyDevice> pty_;  // last: destroyed first, so its device thread stops before the rest goes
 };
 
 // Paroscientific Digiquartz (PROTOCOLS.md): answers `*0100P3` with one pressure reply, starts
@@ -59,12 +59,12 @@ class DepthMock {
 
   int units_code_;
   FaultInjector faults_;
-  std::unique_ptr<PtyDevice> pty_;
   mutable std::mutex mutex_;
   double pressure_ = 0.0;           // guarded by mutex_
   bool continuous_ = false;         // guarded by mutex_
   std::uint64_t commands_ = 0;      // guarded by mutex_
   std::vector<std::uint8_t> line_;  // device thread: partial command line
+  std::unique_ptr<PtyDevice> pty_;  // last: destroyed first, so its device thread stops before the state it uses
 };
 
 }  // namespace vog::mock
