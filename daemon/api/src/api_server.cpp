@@ -32,6 +32,11 @@ std::string millis(Clock::duration d) {
   return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(d).count()) + " ms";
 }
 
+}  // namespace
+
+// Outside the anonymous namespace: ApiServer::Core, which holds one, has external linkage.
+namespace detail {
+
 // Failed authentications per peer address: the first kFreeFailures cost nothing, each later one
 // makes the address wait kFirstWait, doubling up to kMaxWait. An address's record is forgotten
 // kForgetAfter after its last failure or at its first success; at most kMaxPeers are kept (the one
@@ -93,7 +98,7 @@ class AuthThrottle {
   std::unordered_map<std::string, Peer> peers_;
 };
 
-}  // namespace
+}  // namespace detail
 
 using Session = ApiServer::Session;
 
@@ -138,10 +143,10 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   std::unique_ptr<asio::ssl::context> tls;  // null: plain TCP
   Dispatcher dispatcher;
   tcp::acceptor acceptor;
-  asio::steady_timer accept_retry;    // after a failed accept (out of descriptors): wait, not spin
-  bool stopped = false;               // io thread only
-  std::uint64_t next_session_id = 1;  // io thread only
-  AuthThrottle auth_throttle;         // io thread only
+  asio::steady_timer accept_retry;     // after a failed accept (out of descriptors): wait, not spin
+  bool stopped = false;                // io thread only
+  std::uint64_t next_session_id = 1;   // io thread only
+  detail::AuthThrottle auth_throttle;  // io thread only
   // Open sessions, for broadcasts. A session is owned by its pending asynchronous operations (each
   // handler holds a shared_ptr), never by this map: a session holds the Core, so owning it here
   // would be a cycle that outlives an io_context stopped with sessions open.
