@@ -116,10 +116,12 @@ double cpuSeconds() {
 
 // Observers that request the whole map `requests` times each and never read, and one client asking
 // for the status every 20 ms for `duration_s`.
-// The server on loopback at a free port.
+// The server on loopback at a free port; every client comes from one address, so the per-address cap
+// is the server's.
 Result<std::pair<std::unique_ptr<api::ApiServer>, std::uint16_t>> serveOnLoopback(asio::io_context& io,
                                                                                   api::ApiBackend& backend,
-                                                                                  const api::ApiServerConfig& config) {
+                                                                                  api::ApiServerConfig config) {
+  config.max_clients_per_peer = config.max_clients;
   auto server = api::ApiServer::create(io, backend, config);
   if (!server) return server.error();
   const auto port = (*server)->listen("127.0.0.1", 0);
@@ -133,7 +135,6 @@ int stalledReaders(std::shared_ptr<const map::MergedMap> map, int observers, int
   api::ApiServerConfig config;
   config.dispatch.operator_secret = vog::bench::kOperatorSecret;
   config.max_clients = static_cast<std::size_t>(observers) + 8;
-  config.max_clients_per_peer = config.max_clients;  // every client is on loopback
   config.max_in_flight = std::max<std::size_t>(config.max_in_flight, static_cast<std::size_t>(requests));
   config.max_queued_responses = std::max(config.max_queued_responses, config.max_in_flight);
   auto served = serveOnLoopback(io, backend, config);

@@ -84,12 +84,13 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   if (::mkdtemp(tmpl) == nullptr) return fail("cannot create a temporary folder");
   const fs::path dir = tmpl;
   std::ofstream(dir / "secret") << vog::bench::kOperatorSecret << "\n";
+  fs::permissions(dir / "secret", fs::perms::owner_read | fs::perms::owner_write);  // vogd refuses a readable one
   fs::permissions(dir / "secret", fs::perms::owner_read | fs::perms::owner_write);
   std::ofstream(dir / "vogd.yaml") << "source: sim\nsim:\n  scene: " << fs::absolute(scene).string()
                                    << "\n  seed: 1\n  speedup: " << speedup
                                    << "\nmission:\n  start_on_launch: true\n  max_submaps: " << submaps
                                    << "\n  box_min_m: [-6, -4, -4]\n  box_max_m: [6, 4, 0]\n"
-                                      "api:\n  port: 0\n  secret_file: "
+                                      "api:\n  port: 0\n  max_clients_per_peer: 64\n  secret_file: "
                                    << (dir / "secret").string() << "\n"
                                    << "log:\n  level: warning\n";
   vog::test::Subprocess daemon({vogd, "--config", (dir / "vogd.yaml").string(), "--mission-dir",
