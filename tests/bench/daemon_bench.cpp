@@ -3,7 +3,9 @@
 // fetching map deltas, while the planner publishes waypoints. Reports the waypoint latency from the
 // planner's hand-over (the daemon's wall clock in each waypoint) to each observer's receipt, losses,
 // the time to fetch the whole map at the end, and the daemon's own RSS and CPU (from /proc, sampled
-// every second; 100 % = one core). vogd and the clients share this machine's cores.
+// every second; 100 % = one core), at its peak and at the mission's end; then restarts vogd on the
+// mission's folder and reports its RSS once every submap has been read back (a resumed mission).
+// vogd and the clients share this machine's cores.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
 #include "subprocess.hpp"
@@ -93,19 +95,28 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
                                       "api:\n  port: 0\n  max_clients_per_peer: 64\n  secret_file: "
                                    << (dir / "secret").string() << "\n"
                                    << "log:\n  level: warning\n";
-  vog::test::Subprocess daemon({vogd, "--config", (dir / "vogd.yaml").string(), "--mission-dir",
-                                (dir / "mission").string(), "--port-file", (dir / "port").string()},
-                               {}, dir / "vogd.log");
-  if (!daemon.started()) return fail("cannot start " + vogd);
-  std::uint16_t port = 0;
-  for (int i = 0; i < 300 && port == 0; ++i) {
-    std::ifstream in(dir / "port");
-    int p = 0;
-    if (in >> p)
-      port = static_cast<std::uint16_t>(p);
-    else
+  const std::vector<std::string> command = {vogd,
+                                            "--config",
+                                            (dir / "vogd.yaml").string(),
+                                            "--mission-dir",
+                                            (dir / "mission").string(),
+                                            "--port-file",
+                                            (dir / "port").string()};
+  // Waits for a started vogd to listen and returns its port (0 on failure). A resumed vogd listens
+  // once it has read its mission back.
+  auto start = [&](vog::test::Subprocess& process, double timeout_s) -> std::uint16_t {
+    if (!process.started()) return 0;
+    for (int i = 0; i < static_cast<int>(timeout_s * 50.0); ++i) {
+      std::ifstream in(dir / "port");
+      int p = 0;
+      if (in >> p) return static_cast<std::uint16_t>(p);
+      if (!process.running()) return 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
+    }
+    return 0;
+  };
+  vog::test::Subprocess daemon(command, {}, dir / "vogd.log");
+  const std::uint16_t port = start(daemon, 6.0);
   if (port == 0) return fail("vogd did not start listening: " + vog::test::readTextFile(dir / "vogd.log"));
 
   std::atomic<bool> stop{false};
@@ -138,6 +149,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   }
   // The operator: status and config once a second, the map as deltas every 5 s.
   std::string final_state;
+  std::uint32_t n_submaps = 0;
   std::uint64_t published = 0;
   double delta_fetch_s_max = 0.0;
   vog::api::MapMirror mirror;
@@ -161,6 +173,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
       delta_fetch_s_max = std::max(delta_fetch_s_max, std::chrono::duration<double>(Clock::now() - f0).count());
     }
     final_state = vog::api::toString(st->mission_state);
+    n_submaps = st->n_submaps;
     if (st->mission_state == vog::api::MissionState::kComplete || st->mission_state == vog::api::MissionState::kAborted)
       break;
   }
@@ -176,6 +189,30 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   if (auto s = sampleProc(daemon.pid())) samples.push_back(*s);
   daemon.signal(SIGTERM);
   const int exit_status = daemon.wait(5.0);
+
+  // The same mission resumed from its folder: vogd reads every submap back, then waits.
+  fs::remove(dir / "port");
+  double resumed_rss_mb = 0.0, resume_s = 0.0;
+  std::uint32_t resumed_submaps = 0;
+  {
+    vog::test::Subprocess again(command, {}, dir / "vogd-resumed.log");
+    const auto r0 = Clock::now();
+    const std::uint16_t again_port = start(again, 600.0);
+    if (again_port == 0) return fail("vogd did not resume: " + vog::test::readTextFile(dir / "vogd-resumed.log"));
+    auto c = vog::client::ApiClient::connect("127.0.0.1", again_port);
+    if (!c) return fail("resumed vogd: " + c.error().message);
+    for (int i = 0; i < 600 && resumed_submaps < n_submaps; ++i) {
+      auto st = (*c)->status();
+      if (!st) return fail("resumed vogd status: " + st.error().message);
+      resumed_submaps = st->n_submaps;
+      if (resumed_submaps < n_submaps) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    resume_s = std::chrono::duration<double>(Clock::now() - r0).count();
+    std::this_thread::sleep_for(std::chrono::seconds(2));  // the merge of what was read back settles
+    if (auto s = sampleProc(again.pid())) resumed_rss_mb = s->rss_mb;
+    again.signal(SIGTERM);
+    again.wait(5.0);
+  }
   std::error_code ec;
   fs::remove_all(dir, ec);
   if (!errors.empty()) return fail(errors.front());
@@ -206,7 +243,12 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   out.add("map_known_voxels", static_cast<std::int64_t>(fresh.knownVoxelCount()));
   out.add("map_fetch_s", snapshot_s);
   out.add("map_delta_fetch_s_max", delta_fetch_s_max);
+  out.add("submaps", static_cast<std::int64_t>(n_submaps));
   out.add("vogd_rss_mb_peak", samples.back().hwm_mb);
+  out.add("vogd_rss_mb_end", samples.back().rss_mb);
+  out.add("vogd_rss_mb_resumed", resumed_rss_mb);
+  out.add("resumed_submaps", static_cast<std::int64_t>(resumed_submaps));
+  out.add("resume_s", resume_s);
   out.add("vogd_rss_mb_mean", rss_sum / static_cast<double>(samples.size()));
   out.add("vogd_cpu_pct_mean", 100.0 * (samples.back().cpu_s - samples.front().cpu_s) /
                                    std::max(1e-3, samples.back().t_s - samples.front().t_s));

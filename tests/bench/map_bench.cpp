@@ -62,7 +62,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   auto vog = map::VogMap::create(config).value();
   for (const auto& e : entries) (void)vog->addSubmap(e.id, e.grid, e.T_world_submap);
   std::size_t leaves = 0;
-  for (const auto& e : entries) leaves += e.grid->tree().getNumLeafNodes();
+  for (const auto& e : entries) leaves += e.grid->leafCount();
 
   // Merge from scratch, one submap at a time (each add is the incremental step of a growing map).
   std::vector<double> scratch_s;

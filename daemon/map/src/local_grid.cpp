@@ -8,8 +8,8 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <cassert>
 #include <bit>
-#include <sstream>
 #include <unordered_map>
 
 namespace vog::map {
@@ -82,9 +82,19 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, con
 }
 
 Result<std::string> LocalGrid::serialize() const {
-  std::ostringstream out(std::ios_base::out | std::ios_base::binary);
-  if (!tree_->write(out) || !out.good()) return Error{"cannot serialise the OcTree of a local grid"};
-  return std::move(out).str();
+  if (!finalized_) return Error{"cannot serialise a local grid that is still open for scans"};
+  return leaves_.writeOcTree(config_.resolution_m);
+}
+
+const octomap::OcTree& LocalGrid::tree() const {
+  assert(tree_ && "a finalized LocalGrid has no OcTree");
+  return *tree_;
+}
+
+std::size_t LocalGrid::residentBytes() const {
+  const std::size_t per_point = sizeof(Eigen::Vector3d);
+  return leaves_.memoryBytes() + per_point * (cloud_.points.capacity() + cloud_.normals.capacity()) +
+         per_point * sensor_origins_.capacity();
 }
 
 Status LocalGrid::save(const std::filesystem::path& ot_file) const {
@@ -157,15 +167,17 @@ Status LocalGrid::insertRays(const Eigen::Vector3d& origin_grid, std::span<const
 
 void LocalGrid::finalize() {
   if (finalized_) return;
-  tree_->updateInnerOccupancy();
-  cacheLeaves();
+  packLeaves();
   computeKnownBox();
   computeCloud();
   ray_.reset();
+  tree_.reset();
+  sensor_origins_ = {};
   finalized_ = true;
 }
 
 std::optional<float> LocalGrid::logOddsAt(const VoxelKey& key) const {
+  if (finalized_) return leaves_.find(key);
   octomap::OcTreeKey k;
   if (!toOctoKey(key, k)) return std::nullopt;
   const octomap::OcTreeNode* node = tree_->search(k);
@@ -180,6 +192,11 @@ std::optional<float> LocalGrid::logOdds(const Eigen::Vector3d& p_grid) const {
 
 std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
   std::vector<Leaf> out;
+  if (finalized_) {
+    out.reserve(leaves_.size());
+    forEachLeaf([&](const Leaf& leaf) { out.push_back(leaf); });
+    return out;
+  }
   const unsigned max_depth = tree_->getTreeDepth();
   for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
     // A leaf at depth d covers 2^(16-d) voxels per axis; its key is the voxel just above its centre.
@@ -196,18 +213,14 @@ std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
   return out;
 }
 
-void LocalGrid::cacheLeaves() {
-  const auto all = leaves();
-  packed_leaves_.clear();
-  packed_leaves_.reserve(all.size());
-  for (const Leaf& leaf : all) {
-    PackedLeaf p;
-    for (int i = 0; i < 3; ++i) p.min[i] = static_cast<std::int16_t>(leaf.min[i]);
-    p.span_log2 = static_cast<std::uint8_t>(std::countr_zero(static_cast<unsigned>(leaf.max.x() - leaf.min.x() + 1)));
-    p.log_odds = leaf.log_odds;
-    packed_leaves_.push_back(p);
+void LocalGrid::packLeaves() {
+  std::vector<PackedLeaves::Leaf> packed;
+  packed.reserve(tree_->getNumLeafNodes());
+  for (const Leaf& leaf : leaves()) {
+    const int span_log2 = std::countr_zero(static_cast<unsigned>(leaf.max.x() - leaf.min.x() + 1));
+    packed.push_back({leaf.min, span_log2, leaf.log_odds});
   }
-  packed_leaves_.shrink_to_fit();
+  leaves_ = PackedLeaves::pack(std::move(packed));
 }
 
 void LocalGrid::computeKnownBox() {

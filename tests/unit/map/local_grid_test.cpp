@@ -68,11 +68,11 @@ TEST(LocalGrid, FinalizedGridIsImmutable) {
   const std::vector<BeamEnd> beams = {{Eigen::Vector3d(1.0, 0.0, 0.0), true}};
   ASSERT_TRUE(grid->insertRays(Eigen::Vector3d::Zero(), beams).ok());
   grid->finalize();
-  const auto size = grid->tree().size();
+  const auto size = grid->leafCount();
   const Status s = grid->insertRays(Eigen::Vector3d::Zero(), beams);
   EXPECT_FALSE(s.ok());
   EXPECT_NE(s.error().message.find("finalized"), std::string::npos);
-  EXPECT_EQ(grid->tree().size(), size);
+  EXPECT_EQ(grid->leafCount(), size);
 }
 
 TEST(LocalGrid, BadInputIsRejectedAndChangesNothing) {

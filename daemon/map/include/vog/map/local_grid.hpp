@@ -6,12 +6,17 @@
 // AABB of its known space and its downsampled occupied point cloud with normals (thesis 4.2 caches this
 // for ICP). After finalize() only its base pose changes, and that pose lives in the VogMap, not here.
 // A finalized grid is shared read-only (std::shared_ptr<const LocalGrid>) and safe for concurrent readers.
+//
+// A finalized grid no longer holds its OcTree: its leaves are kept as PackedLeaves (about 1.3 bytes per
+// leaf against the tree's 50-80), which answer the point queries and the merge, and reproduce the
+// tree's .ot file byte for byte when the grid is saved.
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
 #include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
 #include "vog/map/grid_config.hpp"
+#include "vog/map/packed_leaves.hpp"
 #include "vog/map/voxel_key.hpp"
 
 #include <filesystem>
@@ -67,7 +72,8 @@ class LocalGrid {
   const GridConfig& config() const { return config_; }
   double resolution() const { return config_.resolution_m; }
   double invResolution() const { return inv_resolution_; }
-  const octomap::OcTree& tree() const { return *tree_; }
+  // The tree of a grid still open for scans (a finalized grid has none: see leaves()).
+  const octomap::OcTree& tree() const;
   std::size_t scanCount() const { return scan_count_; }
 
   // Valid after finalize(): inclusive voxel-key box and metric box of known space (grid frame); the key
@@ -85,13 +91,16 @@ class LocalGrid {
     float log_odds;
   };
   std::vector<Leaf> leaves() const;
-  // The same leaves from the compact copy cached by finalize() (merging walks them many times; the
-  // OctoMap leaf iterator costs as much as the merge itself). Finalized grids only.
+  // The same leaves, in the same order, from the packed copy made by finalize(). Finalized grids only.
   template <class F>
   void forEachLeaf(F&& f) const;
+  std::size_t leafCount() const { return leaves_.size(); }
+  // Heap bytes a finalized grid holds (its leaves and its cloud).
+  std::size_t residentBytes() const;
 
-  // The tree in OctoMap's .ot format. OctoMap's own writer reports success whatever its stream did, so
-  // the bytes are made in memory and written by save() (or the caller) with every write checked.
+  // The tree in OctoMap's .ot format (finalized grids only): the bytes OctoMap's writer would produce,
+  // made from the packed leaves. They are made in memory and written by save() (or the caller) with
+  // every write checked (OctoMap's own writer reports success whatever its stream did).
   Result<std::string> serialize() const;
   // Writes serialize() atomically (writeFileAtomically: each write, the fsync, the rename and the
   // directory fsync checked); a full disk or any failed write is an error naming the file and leaves
@@ -100,26 +109,20 @@ class LocalGrid {
 
  private:
   LocalGrid(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
-  // A leaf in 12 bytes: its minimum voxel key (local keys fit 16 bits) and its side as a power of two.
-  struct PackedLeaf {
-    std::int16_t min[3];
-    std::uint8_t span_log2;
-    float log_odds;
-  };
-  void cacheLeaves();
+  void packLeaves();
   void computeKnownBox();
   void computeCloud();
 
   GridConfig config_;
   double inv_resolution_;
-  std::unique_ptr<octomap::OcTree> tree_;
+  std::unique_ptr<octomap::OcTree> tree_;  // null once finalized
   std::size_t scan_count_ = 0;
   bool finalized_ = false;
-  std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted
+  std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted, dropped by finalize()
   // insertRays()'s buffer of ray keys: OctoMap sizes it for 100,000 keys (600 kB), so it is made once
   // per grid, not per scan, and dropped by finalize().
   std::unique_ptr<octomap::KeyRay> ray_;
-  std::vector<PackedLeaf> packed_leaves_;
+  PackedLeaves leaves_;
   KeyBox known_keys_;
   geometry::PointCloud cloud_;
 };
@@ -127,13 +130,12 @@ class LocalGrid {
 template <class F>
 void LocalGrid::forEachLeaf(F&& f) const {
   Leaf leaf;
-  for (const PackedLeaf& p : packed_leaves_) {
-    const int last = (1 << p.span_log2) - 1;
-    leaf.min = VoxelKey(p.min[0], p.min[1], p.min[2]);
-    leaf.max = leaf.min + VoxelKey::Constant(last);
+  leaves_.forEach([&](const PackedLeaves::Leaf& p) {
+    leaf.min = p.min;
+    leaf.max = p.min + VoxelKey::Constant((1 << p.span_log2) - 1);
     leaf.log_odds = p.log_odds;
     f(leaf);
-  }
+  });
 }
 
 }  // namespace vog::map
