@@ -5,12 +5,15 @@
 #include "pier_submaps.hpp"
 #include "synthetic_scene.hpp"
 
+#include "vog/map/merge_worker.hpp"
 #include "vog/map/merged_map.hpp"
 
 #include <CLI/CLI.hpp>
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <ctime>
+#include <functional>
 #include <filesystem>
 #include <cstdio>
 #include <random>
@@ -24,12 +27,20 @@ struct MapBenchOptions {
   int submaps = 300;
   int scans = 100;
   int threads = 2;
+  int merge_threads = 2;  // threads lent to the parallel merges (MergedMap::sync)
   std::uint64_t seed = 1;
   std::string out_dir;  // when set: the merged map (.bt, .ot) and the VogMap directory are written here
 };
 
 std::vector<map::SubmapEntry> buildSubmaps(const MapBenchOptions& opt, const map::GridConfig& config) {
   return vog::bench::buildPierSubmaps(config, opt.submaps, opt.scans, opt.threads, opt.seed);
+}
+
+// CPU seconds of the calling thread (a shared machine's wall clock also counts the other users' turns).
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 template <class F>
@@ -48,6 +59,8 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   app.add_option("--submaps", opt.submaps, "number of submaps")->check(CLI::Range(2, 5000));
   app.add_option("--scans", opt.scans, "scans per submap")->check(CLI::Range(1, 10000));
   app.add_option("--threads", opt.threads, "threads used to build the submaps (not timed)")->check(CLI::Range(1, 64));
+  app.add_option("--merge-threads", opt.merge_threads, "threads of the parallel merge figures")
+      ->check(CLI::Range(1, 64));
   app.add_option("--seed", opt.seed, "noise seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
   app.add_option("--out", opt.out_dir, "write merged.bt, merged.ot and the VogMap (vogmap/) to this directory");
@@ -66,10 +79,12 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
 
   // Merge from scratch, one submap at a time (each add is the incremental step of a growing map).
   std::vector<double> scratch_s;
+  std::vector<double> scratch_cpu_s;
   std::vector<double> add_ms;
   std::unique_ptr<map::MergedMap> merged;
   for (int rep = 0; rep < 3; ++rep) {
     merged = map::MergedMap::create(config).value();
+    const double cpu0 = threadCpuSeconds();
     const bench::Stopwatch sw;
     for (const auto& e : entries) {
       const bench::Stopwatch one;
@@ -77,6 +92,76 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
       if (rep == 0) add_ms.push_back(one.seconds() * 1e3);
     }
     scratch_s.push_back(sw.seconds());
+    scratch_cpu_s.push_back(threadCpuSeconds() - cpu0);
+  }
+
+  // Merge from scratch in one sync() with threads: the same voxels as the serial merge.
+  const map::MergeThreads threads = map::spawnMergeThreads(opt.merge_threads);
+  std::vector<double> scratch_parallel_s;
+  std::vector<double> scratch_parallel_cpu_s;  // all threads: over scratch_parallel_s, the cores it got
+  bool parallel_identical = true;
+  for (int rep = 0; rep < 3; ++rep) {
+    auto parallel = map::MergedMap::create(config).value();
+    const bench::Stopwatch sw;
+    const std::clock_t cpu0 = std::clock();
+    (void)parallel->sync(entries, map::MergeConfig{}, {}, threads);
+    scratch_parallel_cpu_s.push_back(static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC);
+    scratch_parallel_s.push_back(sw.seconds());
+    parallel_identical = parallel_identical && parallel->sameVoxels(*merged);
+  }
+
+  // The same merge with its tasks run one after the other, each timed in CPU seconds: the sum over the
+  // parallel calls of their longest task is the wall time the merge takes on otherwise idle cores (a
+  // shared machine does not give both threads a core); compare with merge_scratch_cpu_s, the serial
+  // merge's CPU time.
+  double ideal_s = 0.0;
+  double task_sum_s = 0.0;
+  {
+    map::MergeThreads timed;
+    timed.tasks = opt.merge_threads;
+    timed.run = [&](const std::function<void(int)>& task) {
+      double longest_s = 0.0;
+      for (int t = 0; t < timed.tasks; ++t) {
+        const double cpu0 = threadCpuSeconds();
+        task(t);
+        const double cpu_s = threadCpuSeconds() - cpu0;
+        longest_s = std::max(longest_s, cpu_s);
+        task_sum_s += cpu_s;
+      }
+      ideal_s += longest_s;
+    };
+    auto parallel = map::MergedMap::create(config).value();
+    (void)parallel->sync(entries, map::MergeConfig{}, {}, timed);
+    parallel_identical = parallel_identical && parallel->sameVoxels(*merged);
+  }
+
+  // Every submap moved (a loop closure that bends the whole map): serial, then with threads.
+  std::vector<double> remerge_all_ms;
+  std::vector<double> remerge_all_parallel_ms;
+  {
+    std::vector<geometry::Pose3> moved_poses = vog->poses();
+    const auto moveAll = [&](double dx) {
+      for (auto& T : moved_poses) T = geometry::poseFromXyzRpy(dx, 0.5 * dx, 0.0, 0.0, 0.0, 0.5 * dx) * T;
+      (void)vog->deform(moved_poses);
+      return vog->entries();
+    };
+    for (int rep = 0; rep < 2; ++rep) {
+      const auto current = moveAll(0.02);
+      const bench::Stopwatch sw;
+      (void)merged->sync(current, map::MergeConfig{});
+      remerge_all_ms.push_back(sw.seconds() * 1e3);
+    }
+    auto reference = map::MergedMap::create(config).value();
+    for (int rep = 0; rep < 2; ++rep) {
+      const auto current = moveAll(-0.02);
+      const bench::Stopwatch sw;
+      (void)merged->sync(current, map::MergeConfig{}, {}, threads);
+      remerge_all_parallel_ms.push_back(sw.seconds() * 1e3);
+      if (rep == 1) {
+        for (const auto& e : current) (void)reference->add(e);
+        parallel_identical = parallel_identical && reference->sameVoxels(*merged);
+      }
+    }
   }
 
   // Partial re-merge: 10 of N submaps moved (a loop closure), the rest unchanged.
@@ -151,8 +236,17 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   out.add("leaves_per_submap", static_cast<double>(leaves) / opt.submaps);
   out.add("known_voxels", static_cast<std::int64_t>(snap->knownVoxelCount()));
   out.add("merge_scratch_s", bench::median(scratch_s));
+  out.add("merge_scratch_cpu_s", bench::median(scratch_cpu_s));
   out.add("merge_add_ms", bench::median(add_ms));
   out.add("merge_add_ms_p95", bench::percentile(add_ms, 0.95));
+  out.add("merge_threads", opt.merge_threads);
+  out.add("merge_scratch_parallel_s", bench::median(scratch_parallel_s));
+  out.add("merge_scratch_parallel_cpu_s", bench::median(scratch_parallel_cpu_s));
+  out.add("merge_scratch_parallel_ideal_s", ideal_s);
+  out.add("merge_scratch_task_sum_s", task_sum_s);
+  out.add("remerge_all_ms", bench::median(remerge_all_ms));
+  out.add("remerge_all_parallel_ms", bench::median(remerge_all_parallel_ms));
+  out.add("parallel_identical", std::string(parallel_identical ? "true" : "false"));
   out.add("remerge_k10_ms", bench::median(remerge_ms));
   out.add("snapshot_ms", bench::median(snapshot_ms));
   out.add("point_query_merged_ns", bench::median(merged_ns));

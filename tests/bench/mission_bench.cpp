@@ -39,6 +39,19 @@
 // others depend only on the seed. wall_s is the mission's: simulation, mapping, merging and planning,
 // without the evaluation (the observable set, the reference grid at true poses, coverage), which
 // wall_total_s includes.
+// Long missions: --path lawnmower replaces the exploration by a scripted survey through the same loop
+// (simulator, mapping, merge thread, lockstep synchronisation): lanes along x (sim::lawnmowerPath),
+// repeated until the submap budget is spent, each pass the reverse of the one before, looking across
+// the lanes (+y on even passes, -y on odd ones), at one third of the box's height below its top for
+// passes 0-1, two thirds for passes 2-3, and so on; so the same lanes are seen again with the same
+// heading every other pass, where loop closures come from. Waypoints are given in the map frame and
+// reach the vehicle one by one through the current navigation error. The planner still plans on the
+// newest snapshot every --plan-every-s of simulated time (measured; its waypoints are not followed).
+// --report-every K with --series FILE writes one JSON line per K closed submaps: memory (VmRSS,
+// VmHWM), mapping time per closed submap, pose-graph optimisation, merges (all, and those right after
+// an accepted loop closure), planning, and the real-time factor, each over the last K submaps.
+// --evaluate 0 skips the evaluation (observable set, reference grid at true poses, coverage, RMSE,
+// closures against the truth), so that memory and time are the mission's own.
 // Run from the repository root (scene paths are relative to it) or pass --scene.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
@@ -51,6 +64,7 @@
 #include "vog/map/voxel_key.hpp"
 #include "vog/plan/nbv_planner.hpp"
 #include "vog/sim/lockstep.hpp"
+#include "vog/sim/paths.hpp"
 #include "vog/sim/scene.hpp"
 #include "vog/sim/world.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
@@ -100,13 +114,14 @@ class ScanQueue final : public sim::SimulationSink {
     p.input.z_roll_pitch = Eigen::Vector3d(T_odom.translation().z(), rpy.x(), rpy.y());
     p.input.scan = ping.scan;
     p.T_true = T_true;
-    T_true_by_stamp[ping.scan.stamp_ns] = T_true;
+    if (record_truth) T_true_by_stamp[ping.scan.stamp_ns] = T_true;
     pending.push_back(std::move(p));
   }
   void truth(const sim::VehicleState& /*state*/, const Pose3& T_odom) override { T_odom_now = T_odom; }
 
   std::deque<PendingScan> pending;
   std::map<std::int64_t, Pose3> T_true_by_stamp;  // every scan's true pose (closures are judged by it)
+  bool record_truth = true;                       // fill T_true_by_stamp (the evaluation's)
   Pose3 T_odom_now = Pose3::Identity();
 };
 
@@ -178,7 +193,46 @@ struct MergeRow {
   std::size_t n_submaps = 0;
   double merge_ms = 0.0;
   int remerged = 0;
+  bool after_closure = false;  // the set was submitted right after a loop closure was accepted
 };
+
+// A line of /proc/self/status in MB (VmRSS: resident now, VmHWM: its peak); NaN when absent.
+double missionStatusMb(const std::string& key) {
+  std::ifstream f("/proc/self/status");
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind(key + ":", 0) == 0) return std::stod(line.substr(key.size() + 1)) / 1024.0;
+  return std::nan("");
+}
+
+// A JsonObject on one line (a JSON Lines record).
+std::string jsonLine(const vog::bench::JsonObject& object) {
+  const std::string s = object.str();
+  std::string out;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s[i] != '\n') {
+      out += s[i];
+      continue;
+    }
+    while (i + 1 < s.size() && s[i + 1] == ' ') ++i;
+    if (!out.empty() && out.back() == ',') out += ' ';
+  }
+  return out;
+}
+
+// Pass `pass` of the scripted survey (see the header comment), map frame: the lanes of
+// sim::lawnmowerPath without its start pose, reversed on odd passes, looking across them.
+vog::Result<std::vector<plan::Waypoint>> surveyPass(const sim::Scene& scene, sim::PathConfig lanes, int pass) {
+  const double top_m = scene.bounds_world.max().z(), height_m = scene.bounds_world.sizes().z();
+  lanes.z_m = top_m - height_m * ((pass / 2) % 2 == 0 ? 1.0 : 2.0) / 3.0;
+  auto path = sim::lawnmowerPath(scene, lanes);
+  if (!path) return path.error();
+  std::vector<sim::Waypoint> w(path->begin() + 1, path->end());
+  if (pass % 2 == 1) std::reverse(w.begin(), w.end());
+  const double yaw_rad = (pass % 2 == 0 ? 0.5 : -0.5) * std::numbers::pi;
+  std::vector<plan::Waypoint> out;
+  for (const sim::Waypoint& p : w) out.push_back({p.xyz_world, yaw_rad});
+  return out;
+}
 
 }  // namespace
 
@@ -195,6 +249,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   bool json = false;
   bool obstruction_feedback = true;
   bool same_run_global_tree = false;
+  bool evaluate = true;
+  std::string path_name;  // empty: exploration
+  sim::PathConfig lanes;
+  double plan_every_s = 10.0;
+  int report_every = 0;
+  std::string series_file;
   slam::MappingPipelineConfig mc;   // library defaults; the options below override a few
   explore::ExplorationConfig loop;  // the same (vogd's loop); revisits with vog-lc only
   plan::PlannerConfig& pc = loop.planner;
@@ -203,7 +263,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--scene", scene_file, "scene YAML file");
   app.add_option("--mode", mode_name, "baseline | vog | vog-lc");
   app.add_option("--seed", seed, "simulation and planner seed");
-  app.add_option("--submaps", submap_budget, "submap budget (thesis Table 4.2: 156)")->check(CLI::Range(1, 100000));
+  app.add_option("--submaps,--max-submaps", submap_budget, "submap budget (thesis Table 4.2: 156)")
+      ->check(CLI::Range(1, 100000));
   app.add_option("--max-sim-s", max_sim_s, "simulated time limit, s")->check(CLI::Range(1.0, 1e7));
   app.add_option("--coverage-every", coverage_every, "compute coverage every n planning iterations")
       ->check(CLI::Range(1, 100000));
@@ -237,8 +298,24 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       "--lc-max-heading-deg",
       [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
       "loop closures: viewing-direction gate, deg");
+  app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
+               "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
   app.add_flag("--same-run-global-tree", same_run_global_tree,
                "vog / vog-lc: also score the run's scans fused into one global tree at raw odometry");
+  app.add_option("--path", path_name,
+                 "lawnmower: a scripted survey, repeated until the submap budget is spent, instead of the exploration");
+  app.add_option("--lane-spacing", lanes.lane_spacing_m, "--path lawnmower: distance between lanes, m")
+      ->check(CLI::Range(0.1, 100.0));
+  app.add_option("--lane-margin", lanes.margin_m, "--path lawnmower: lanes' distance from the box's sides, m")
+      ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--plan-every-s", plan_every_s,
+                 "--path lawnmower: plan on the newest snapshot this often (simulated s; timed, not followed)")
+      ->check(CLI::Range(0.1, 1e6));
+  app.add_option("--report-every", report_every, "write a --series row every K closed submaps (0: none)")
+      ->check(CLI::Range(0, 100000));
+  app.add_option("--series", series_file, "JSON Lines file for the --report-every rows");
+  app.add_option("--evaluate", evaluate,
+                 "score the run against the truth (observable set, reference grid, coverage, RMSE, closures) (1/0)");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {
@@ -257,6 +334,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   }
   if (same_run_global_tree && mode == Mode::kBaseline)
     return fail("--same-run-global-tree compares a VOG mode's map with one global tree; the baseline is that tree");
+  if (same_run_global_tree && !evaluate) return fail("--same-run-global-tree is part of the evaluation (--evaluate 1)");
+  if (!path_name.empty() && path_name != "lawnmower") return fail("--path must be lawnmower, got '" + path_name + "'");
+  const bool scripted = !path_name.empty();
+  if ((report_every > 0) != !series_file.empty()) return fail("--report-every and --series go together");
+  if (report_every > 0 && mode == Mode::kBaseline)
+    return fail("--report-every reports the mapping pipeline's submaps: vog or vog-lc");
 
   auto scene = sim::loadScene(scene_file);
   if (!scene) return fail(scene.error().message);
@@ -268,9 +351,14 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   // Ground truth for coverage: surface points observable from a collision-free position in the box.
   sim::ObservableConfig oc;
   oc.max_range_m = sensor_range_m;
-  const vog::geometry::PointCloud surface = world.sampleSurface(0.05, seed);
-  auto observable = sim::observablePoints(world, world.sampleSurface(0.1, seed), oc);
-  if (!observable) return fail(observable.error().message);
+  vog::geometry::PointCloud surface;
+  std::optional<sim::ObservableResult> observable;
+  if (evaluate) {
+    surface = world.sampleSurface(0.05, seed);
+    auto o = sim::observablePoints(world, world.sampleSurface(0.1, seed), oc);
+    if (!o) return fail(o.error().message);
+    observable = std::move(o).value();
+  }
 
   // Simulation: thesis Eq. 4.1 rates as a random walk at a quarter of them (as vog-bench slam).
   sim::LockstepConfig sc;
@@ -301,7 +389,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   map::MergeWorker& worker = **worker_r;
   // The snapshot published at the last synchronisation point (see the header comment).
   std::shared_ptr<const map::MergedMap> published;
-  std::map<std::uint64_t, double> submitted_at_s;  // merge sequence -> simulated time of submission
+  // Merge sequence -> simulated time of submission, and whether a loop closure preceded it.
+  struct Submission {
+    double sim_s = 0.0;
+    bool after_closure = false;
+  };
+  std::map<std::uint64_t, Submission> submitted;
   // Baseline: one global grid in the world frame at raw odometry.
   auto global_r = map::LocalGrid::create(grid_config);
   if (!global_r) return fail(global_r.error().message);
@@ -312,6 +405,15 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   auto truth_r = map::LocalGrid::create(grid_config);
   if (!truth_r) return fail(truth_r.error().message);
   map::LocalGrid& truth_grid = **truth_r;
+  std::ofstream series;
+  if (!series_file.empty()) {
+    if (const auto dir = std::filesystem::path(series_file).parent_path(); !dir.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);
+    }
+    series.open(series_file);
+    if (!series) return fail("cannot write " + series_file);
+  }
 
   pc.box_min_world_m = scene->bounds_world.min();
   pc.box_max_world_m = scene->bounds_world.max();
@@ -326,14 +428,32 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   auto controller_r = explore::ExplorationController::create(loop);
   if (!controller_r) return fail(controller_r.error().message);
   explore::ExplorationController& controller = *controller_r;
+  // The scripted survey's planner: its plans are timed on the newest snapshot, never followed.
+  std::unique_ptr<plan::NbvPlanner> survey_planner;
+  if (scripted) {
+    const Pose3& T_start = scene->T_world_start;
+    auto p = plan::NbvPlanner::create(pc, {T_start.translation(), vog::geometry::yawOf(T_start.linear())});
+    if (!p) return fail(p.error().message);
+    survey_planner = std::move(p).value();
+  }
+  auto planner = [&]() -> const plan::NbvPlanner* { return scripted ? survey_planner.get() : controller.planner(); };
 
   std::vector<IterationRow> iterations;
   std::vector<CollisionRow> collision_rows;
   std::vector<MergeRow> merges;
   std::vector<double> plan_ms_all, plan_cpu_ms_all, merge_ms_all, merge_wait_ms_all;
   std::vector<std::pair<Pose3, Pose3>> path_samples;  // (true, estimated) once per second
-  double evaluation_s = 0.0;  // spent inside the mission loop on the evaluation (not the mission's time)
+  // The true base pose of every closed submap, from the scans fed since the last close.
+  std::map<std::int64_t, Pose3> open_truth;  // stamp -> true pose
+  std::map<std::int64_t, Pose3> base_truth;  // submap -> true pose of its base scan
+  double evaluation_s = 0.0;                 // spent inside the mission loop on the evaluation (not the mission's time)
+  // For the --series rows: feed() time per closed submap, and every optimisation's solve time.
+  // feed() runs on this thread: its CPU time too (the wall time includes waiting for a shared core).
+  std::vector<double> mapping_ms_per_submap, mapping_cpu_ms_per_submap, optimize_ms_all;
+  double mapping_s_open = 0.0, mapping_cpu_s_open = 0.0;  // feed() time since the last closed submap
+  bool series_row_due = false;                            // a multiple of --report-every submaps was just closed
   ScanQueue queue;
+  queue.record_truth = evaluate;
   auto simS = [&] { return 1e-9 * static_cast<double>(simulation.stampNs()); };
   auto nSubmaps = [&] {
     return mode == Mode::kBaseline ? baseline_scans / static_cast<std::size_t>(mc.builder.max_scans)
@@ -353,7 +473,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     published = worker.snapshot();
     for (const map::MergeRecord& r : worker.takeRecords()) {
       merge_ms_all.push_back(r.merge_ms);
-      merges.push_back({submitted_at_s[r.sequence], r.n_submaps, r.merge_ms, r.stats.remerged});
+      const auto s = submitted.extract(r.sequence);
+      const Submission at = s.empty() ? Submission{} : s.mapped();
+      merges.push_back({at.sim_s, r.n_submaps, r.merge_ms, r.stats.remerged, at.after_closure});
     }
     return {};
   };
@@ -363,12 +485,14 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     while (!queue.pending.empty()) {
       PendingScan p = std::move(queue.pending.front());
       queue.pending.pop_front();
-      const vog::bench::Stopwatch reference_insert;
-      const auto inserted = truth_grid.insertScan(p.T_true * fan.T_vehicle_sensor, fan, p.input.scan);
-      evaluation_s += reference_insert.seconds();
-      if (!inserted) {
-        mapping_error = inserted;
-        return;
+      if (evaluate) {
+        const vog::bench::Stopwatch reference_insert;
+        const auto inserted = truth_grid.insertScan(p.T_true * fan.T_vehicle_sensor, fan, p.input.scan);
+        evaluation_s += reference_insert.seconds();
+        if (!inserted) {
+          mapping_error = inserted;
+          return;
+        }
       }
       auto intoGlobalTree = [&] {
         return global.insertScan(p.input.T_world_vehicle_odom * fan.T_vehicle_sensor, fan, p.input.scan);
@@ -389,17 +513,33 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         }
         evaluation_s += global_insert.seconds();
       }
+      open_truth.emplace(p.input.scan.stamp_ns, p.T_true);
+      const vog::bench::Stopwatch feed_time;
+      const double feed_cpu0 = threadCpuS();
       auto u = pipeline.feed(p.input);
+      mapping_s_open += feed_time.seconds();
+      mapping_cpu_s_open += threadCpuS() - feed_cpu0;
       if (!u) {
         mapping_error = u.error();
         return;
+      }
+      if (u->optimized) optimize_ms_all.push_back(u->optimize.solve_ms);
+      if (u->closed_submap) {
+        if (auto it = open_truth.find(u->closed->first_stamp_ns); it != open_truth.end())
+          base_truth.emplace(*u->closed_submap, it->second);
+        open_truth.erase(open_truth.begin(), open_truth.lower_bound(p.input.scan.stamp_ns));
+        mapping_ms_per_submap.push_back(1e3 * mapping_s_open);
+        mapping_cpu_ms_per_submap.push_back(1e3 * mapping_cpu_s_open);
+        mapping_s_open = mapping_cpu_s_open = 0.0;
+        if (report_every > 0 && pipeline.submaps().size() % static_cast<std::size_t>(report_every) == 0)
+          series_row_due = true;
       }
       if (!u->closed_submap && u->moved.empty()) continue;
       if (auto st = syncMerges(); !st) {
         mapping_error = st;
         return;
       }
-      submitted_at_s[worker.submit(pipeline.map().entries())] = simS();
+      submitted[worker.submit(pipeline.map().entries())] = {simS(), !u->closures.empty()};
     }
   };
 
@@ -425,7 +565,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     if (auto st = (*m)->add(e); !st) return st.error();
     const double ms = 1e3 * w.seconds();
     merge_ms_all.push_back(ms);
-    merges.push_back({simS(), nSubmaps(), ms, 0});
+    merges.push_back({simS(), nSubmaps(), ms, 0, false});
     baseline_snapshot = (*m)->snapshot();
     return baseline_snapshot;
   };
@@ -441,15 +581,104 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     return simulation.vehicle().setWaypoints(std::move(out));
   };
 
+  // One planning iteration's figures (iterations.csv), from either loop.
+  auto recordPlan = [&](const plan::PlanResult& r, double ms, double cpu_ms, const map::MergedMap* planned_on) {
+    plan_cpu_ms_all.push_back(cpu_ms);
+    plan_ms_all.push_back(ms);
+    IterationRow row;
+    row.iteration = static_cast<int>(iterations.size());
+    row.sim_s = simS();
+    row.n_submaps = nSubmaps();
+    row.plan_ms = ms;
+    row.status = plan::toString(r.status);
+    row.best_gain = r.best_gain;
+    row.tree_size = r.tree_size;
+    row.global_goal = r.global_goal;
+    row.global_candidates = r.global_candidates;
+    if (const auto& tree = planner()->lastTree(); !tree.empty())
+      row.root_shift_m = (tree.front().w.p_world - estimatedPose().translation()).norm();
+    if (evaluate && planned_on != nullptr && row.iteration % coverage_every == 0) {
+      const vog::bench::Stopwatch coverage_time;
+      row.coverage = vog::eval::coverageOf(*planned_on, observable->points.points, 2 * grid_config.resolution_m);
+      evaluation_s += coverage_time.seconds();
+    }
+    iterations.push_back(row);
+  };
+
   const vog::bench::Stopwatch mission;
+  // Where the previous --series row ended in each list, and when.
+  struct SeriesMark {
+    std::size_t mapping = 0, optimize = 0, merges = 0, plans = 0;
+    double sim_s = 0.0, wall_s = 0.0, cpu_s = 0.0;
+  };
+  SeriesMark mark;
+  // One --series row: the figures of the submaps closed since the previous row (see the header comment).
+  auto writeSeriesRow = [&]() -> vog::Status {
+    if (auto st = syncMerges(); !st) return st;  // a fixed point of simulated time: the row sees its merges
+    const double sim_s = simS(), wall_s = mission.seconds() - evaluation_s, cpu_s = processCpuS();
+    auto since = [](const std::vector<double>& v, std::size_t from) {
+      return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(from), v.end());
+    };
+    const std::vector<double> mapping_ms = since(mapping_ms_per_submap, mark.mapping);
+    const std::vector<double> optimize_ms = since(optimize_ms_all, mark.optimize);
+    const std::vector<double> mapping_cpu_ms = since(mapping_cpu_ms_per_submap, mark.mapping);
+    const std::vector<double> plan_ms = since(plan_ms_all, mark.plans);
+    const std::vector<double> plan_cpu_ms = since(plan_cpu_ms_all, mark.plans);
+    std::vector<double> merge_ms, merge_after_closure_ms;
+    for (std::size_t i = mark.merges; i < merges.size(); ++i) {
+      merge_ms.push_back(merges[i].merge_ms);
+      if (merges[i].after_closure) merge_after_closure_ms.push_back(merges[i].merge_ms);
+    }
+    vog::bench::JsonObject row;
+    row.add("submaps", static_cast<std::int64_t>(nSubmaps()));
+    row.add("sim_s", sim_s);
+    row.add("wall_s", wall_s);
+    row.add("cpu_s", cpu_s);  // all threads: on a shared machine wall time includes waiting for a core
+    row.add("rss_mb", missionStatusMb("VmRSS"));
+    row.add("hwm_mb", missionStatusMb("VmHWM"));
+    row.add("mapping_ms_median", vog::bench::median(mapping_ms));
+    row.add("mapping_ms_max", vog::bench::percentile(mapping_ms, 1.0));
+    row.add("mapping_cpu_ms_median", vog::bench::median(mapping_cpu_ms));
+    row.add("optimizations", static_cast<std::int64_t>(optimize_ms.size()));
+    row.add("optimize_ms_median", vog::bench::median(optimize_ms));
+    row.add("optimize_ms_max", vog::bench::percentile(optimize_ms, 1.0));
+    row.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
+    row.add("merges", static_cast<std::int64_t>(merge_ms.size()));
+    row.add("merge_ms_p95", vog::bench::percentile(merge_ms, 0.95));
+    row.add("merge_ms_max", vog::bench::percentile(merge_ms, 1.0));
+    row.add("merges_after_closure", static_cast<std::int64_t>(merge_after_closure_ms.size()));
+    row.add("merge_after_closure_ms_p95", vog::bench::percentile(merge_after_closure_ms, 0.95));
+    row.add("merge_after_closure_ms_max", vog::bench::percentile(merge_after_closure_ms, 1.0));
+    row.add("plans", static_cast<std::int64_t>(plan_ms.size()));
+    row.add("plan_ms_p95", vog::bench::percentile(plan_ms, 0.95));
+    row.add("plan_ms_max", vog::bench::percentile(plan_ms, 1.0));
+    row.add("plan_cpu_ms_p95", vog::bench::percentile(plan_cpu_ms, 0.95));
+    row.add("realtime_factor", (sim_s - mark.sim_s) / (wall_s - mark.wall_s));
+    row.add("realtime_factor_total", sim_s / wall_s);
+    row.add("realtime_factor_cpu", (sim_s - mark.sim_s) / (cpu_s - mark.cpu_s));
+    series << jsonLine(row) << '\n' << std::flush;
+    if (!series) return vog::Error{"error while writing " + series_file};
+    mark = {
+        mapping_ms_per_submap.size(), optimize_ms_all.size(), merges.size(), plan_ms_all.size(), sim_s, wall_s, cpu_s};
+    return {};
+  };
+
   simulation.start(queue);
   // vogd's loop (ExplorationController) from the scene's start, at simulated time 0; the estimate
   // is the truth there.
-  if (auto st = controller.start(scene->T_world_start,
-                                 vog::mission::Box{scene->bounds_world.min(), scene->bounds_world.max()},
-                                 simulation.stampNs(), true);
-      !st)
-    return fail(st.error().message);
+  if (!scripted) {
+    if (auto st = controller.start(scene->T_world_start,
+                                   vog::mission::Box{scene->bounds_world.min(), scene->bounds_world.max()},
+                                   simulation.stampNs(), true);
+        !st)
+      return fail(st.error().message);
+  }
+  // The scripted survey: the waypoints of the current pass still to send (map frame).
+  std::deque<plan::Waypoint> survey;
+  int survey_passes = 0;
+  std::int64_t next_plan_ns = 0;
+  std::uint64_t plan_errors = 0;
+  std::string last_plan_error;
   std::string end_reason = "budget";
   std::int64_t next_path_sample_ns = 0;
   std::uint64_t collisions = 0;
@@ -458,13 +687,17 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     const sim::StepResult step = simulation.step(queue);
     processScans();
     if (!mapping_error.ok()) return fail("mapping: " + mapping_error.error().message);
+    if (series_row_due) {
+      series_row_due = false;
+      if (auto st = writeSeriesRow(); !st) return fail(st.error().message);
+    }
     if (simulation.stampNs() >= next_path_sample_ns) {
       path_samples.emplace_back(simulation.vehicle().state().T_world_vehicle(), estimatedPose());
       next_path_sample_ns += 1'000'000'000;
     }
     explore::StepInput in;
     if (step.status == sim::MotionStatus::kBlocked) {
-      const plan::TraversabilityGrid* g = controller.planner()->traversability();
+      const plan::TraversabilityGrid* g = planner() != nullptr ? planner()->traversability() : nullptr;
       CollisionRow c{simS(),
                      simulation.vehicle().state().T_world_vehicle(),
                      estimatedPose(),
@@ -473,7 +706,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                      g != nullptr && g->isSafe(estimatedPose().translation())};
       const auto& last_map = mode == Mode::kBaseline ? baseline_snapshot : published;
       if (last_map) c.map_clearance_m = nearestOccupiedM(*last_map, c.T_estimated.translation(), 2.0);
-      c.true_clearance_m = 2.0;
+      c.true_clearance_m = evaluate ? 2.0 : std::nan("");
       for (const Eigen::Vector3d& q : surface.points)
         c.true_clearance_m = std::min(c.true_clearance_m, (q - c.T_true.translation()).norm());
       collision_rows.push_back(c);
@@ -489,6 +722,37 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     if (simS() >= max_sim_s) {
       end_reason = "time_limit";
       break;
+    }
+    if (scripted) {
+      if (nSubmaps() >= static_cast<std::size_t>(submap_budget)) break;  // "budget"
+      if (simulation.stampNs() >= next_plan_ns) {
+        next_plan_ns += static_cast<std::int64_t>(std::llround(plan_every_s * 1e9));
+        auto snap = snapshot();
+        if (!snap) return fail(snap.error().message);
+        if (*snap) {
+          const Pose3 T = estimatedPose();
+          const vog::bench::Stopwatch w;
+          const double cpu0 = threadCpuS();
+          auto r = survey_planner->plan(*snap, {T.translation(), vog::geometry::yawOf(T.linear())});
+          const double ms = 1e3 * w.seconds(), cpu_ms = 1e3 * (threadCpuS() - cpu0);
+          if (r) {
+            recordPlan(*r, ms, cpu_ms, snap->get());
+          } else {  // e.g. the estimate left the box: counted, the survey goes on
+            ++plan_errors;
+            last_plan_error = r.error().message;
+          }
+        }
+      }
+      if (simulation.vehicle().waypointsLeft() == 0) {
+        if (survey.empty()) {
+          auto pass = surveyPass(*scene, lanes, survey_passes++);
+          if (!pass) return fail(pass.error().message);
+          survey.assign(pass->begin(), pass->end());
+        }
+        if (auto st = sendWaypoints({survey.front()}); !st) return fail(st.error().message);
+        survey.pop_front();
+      }
+      continue;
     }
     in.stamp_ns = simulation.stampNs();
     in.T_world_vehicle = estimatedPose();
@@ -517,29 +781,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     auto out = controller.step(in);
     const double ms = 1e3 * (w.seconds() - map_s);
     if (!out) return fail("exploration: " + out.error().message);
-    if (out->plan) {
-      const plan::PlanResult& r = *out->plan;
-      plan_cpu_ms_all.push_back(1e3 * (threadCpuS() - cpu0 - map_cpu_s));
-      plan_ms_all.push_back(ms);
-      IterationRow row;
-      row.iteration = static_cast<int>(iterations.size());
-      row.sim_s = simS();
-      row.n_submaps = nSubmaps();
-      row.plan_ms = ms;
-      row.status = plan::toString(r.status);
-      row.best_gain = r.best_gain;
-      row.tree_size = r.tree_size;
-      row.global_goal = r.global_goal;
-      row.global_candidates = r.global_candidates;
-      if (const auto& tree = controller.planner()->lastTree(); !tree.empty())
-        row.root_shift_m = (tree.front().w.p_world - estimatedPose().translation()).norm();
-      if (row.iteration % coverage_every == 0) {
-        const vog::bench::Stopwatch coverage_time;
-        row.coverage = vog::eval::coverageOf(*planned_on, observable->points.points, 2 * grid_config.resolution_m);
-        evaluation_s += coverage_time.seconds();
-      }
-      iterations.push_back(row);
-    }
+    if (out->plan) recordPlan(*out->plan, ms, 1e3 * (threadCpuS() - cpu0 - map_cpu_s), planned_on.get());
     if (controller.ending() != explore::Ending::kNone) {
       // The ending's word; with its reason when the vehicle did not come home.
       const bool home =
@@ -561,48 +803,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   auto final_snap = snapshot();
   if (!final_snap) return fail(final_snap.error().message);
   const double mission_wall_s = mission.seconds() - evaluation_s;
-  truth_grid.finalize();
-  const vog::eval::ReferenceReconstruction reference(truth_grid);
   // The reconstruction is the final map's occupied voxels in every mode: what vogd serves as its cloud.
   std::vector<Eigen::Vector3d> estimate;
   vog::eval::appendOccupiedCentres(**final_snap, estimate);
-  auto error = vog::eval::reconstructionError(estimate, reference);
-  if (!error) return fail(error.error().message);
-  // Thesis Fig. 4.12(b): the same run's submaps at their raw odometry poses, loop closures unused.
-  std::optional<double> rmse_same_run_odometry;
-  if (mode == Mode::kVogLc) {
-    auto odometry_map = map::MergedMap::create(grid_config);
-    if (!odometry_map) return fail(odometry_map.error().message);
-    const std::vector<map::SubmapEntry> entries = pipeline.map().entries();
-    for (std::size_t k = 0; k < entries.size(); ++k) {
-      map::SubmapEntry e = entries[k];
-      e.T_world_submap = pipeline.submaps()[k].T_world_base_odom;
-      e.T_submap_world = e.T_world_submap.inverse();
-      if (auto st = (*odometry_map)->add(e); !st) return fail(st.error().message);
-    }
-    std::vector<Eigen::Vector3d> points;
-    vog::eval::appendOccupiedCentres(**odometry_map, points);
-    auto e = vog::eval::reconstructionError(points, reference);
-    if (!e) return fail(e.error().message);
-    rmse_same_run_odometry = e->rmse_m;
-  }
-  // The same run's scans in one global tree at raw odometry: the baseline's fusion on this run's path.
-  std::optional<double> rmse_same_run_global_tree;
-  if (mode != Mode::kBaseline && same_run_global_tree) {
-    global.finalize();
-    std::vector<Eigen::Vector3d> points;
-    vog::eval::appendOccupiedCentres(global, Pose3::Identity(), points);
-    auto e = vog::eval::reconstructionError(points, reference);
-    if (!e) return fail(e.error().message);
-    rmse_same_run_global_tree = e->rmse_m;
-  }
-  // Final coverage after the same rigid alignment as the RMSE (the map lives in the estimated frame):
-  // the observable points are mapped into it.
-  std::vector<Eigen::Vector3d> observable_in_map;
-  const Pose3 T_estimate_reference = error->T_reference_estimate.inverse();
-  for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(T_estimate_reference * p);
-  // Every accepted closure against the truth (the true relative pose of the two base scans), as
-  // vog-bench slam judges them: wrong when off by more than 0.2 m or 2 deg in what it asserts.
+  // The evaluation against the truth (--evaluate 1).
   struct ClosureRow {
     const slam::LoopClosure* closure;
     vog::eval::ClosureError error;
@@ -610,21 +814,62 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   };
   std::vector<ClosureRow> closure_rows;
   std::int64_t closures_wrong = 0;
-  for (const slam::LoopClosure& lc : pipeline.closures()) {
-    auto trueBase = [&](std::int64_t index) {
-      return queue.T_true_by_stamp.at(pipeline.submaps()[static_cast<std::size_t>(index)].first_stamp_ns);
-    };
-    const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
-    const vog::eval::ClosureError e = vog::eval::closureError(lc, T_true);
-    closures_wrong += e.wrong ? 1 : 0;
-    closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
-  }
+  std::optional<double> rmse, rmse_unaligned, rmse_same_run_odometry, rmse_same_run_global_tree, coverage,
+      coverage_unaligned;
+  std::vector<Eigen::Vector3d> observable_in_map;
   std::vector<bool> covered_flags;
-  const double coverage =
-      vog::eval::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
-  const double coverage_unaligned =
-      vog::eval::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
-  if (!iterations.empty()) iterations.back().coverage = coverage_unaligned;
+  if (evaluate) {
+    truth_grid.finalize();
+    const vog::eval::ReferenceReconstruction reference(truth_grid);
+    auto error = vog::eval::reconstructionError(estimate, reference);
+    if (!error) return fail(error.error().message);
+    rmse = error->rmse_m;
+    rmse_unaligned = error->rmse_unaligned_m;
+    // Thesis Fig. 4.12(b): the same run's submaps at their raw odometry poses, loop closures unused.
+    if (mode == Mode::kVogLc) {
+      auto odometry_map = map::MergedMap::create(grid_config);
+      if (!odometry_map) return fail(odometry_map.error().message);
+      const std::vector<map::SubmapEntry> entries = pipeline.map().entries();
+      for (std::size_t k = 0; k < entries.size(); ++k) {
+        map::SubmapEntry e = entries[k];
+        e.T_world_submap = pipeline.submaps()[k].T_world_base_odom;
+        e.T_submap_world = e.T_world_submap.inverse();
+        if (auto st = (*odometry_map)->add(e); !st) return fail(st.error().message);
+      }
+      std::vector<Eigen::Vector3d> points;
+      vog::eval::appendOccupiedCentres(**odometry_map, points);
+      auto e = vog::eval::reconstructionError(points, reference);
+      if (!e) return fail(e.error().message);
+      rmse_same_run_odometry = e->rmse_m;
+    }
+    // The same run's scans in one global tree at raw odometry: the baseline's fusion on this run's path.
+    if (mode != Mode::kBaseline && same_run_global_tree) {
+      global.finalize();
+      std::vector<Eigen::Vector3d> points;
+      vog::eval::appendOccupiedCentres(global, Pose3::Identity(), points);
+      auto e = vog::eval::reconstructionError(points, reference);
+      if (!e) return fail(e.error().message);
+      rmse_same_run_global_tree = e->rmse_m;
+    }
+    // Final coverage after the same rigid alignment as the RMSE (the map lives in the estimated frame):
+    // the observable points are mapped into it.
+    const Pose3 T_estimate_reference = error->T_reference_estimate.inverse();
+    for (const Eigen::Vector3d& p : observable->points.points) observable_in_map.push_back(T_estimate_reference * p);
+    // Every accepted closure against the truth (the true relative pose of the two base scans), as
+    // vog-bench slam judges them: wrong when off by more than 0.2 m or 2 deg in what it asserts.
+    for (const slam::LoopClosure& lc : pipeline.closures()) {
+      auto trueBase = [&](std::int64_t index) {
+        return queue.T_true_by_stamp.at(pipeline.submaps()[static_cast<std::size_t>(index)].first_stamp_ns);
+      };
+      const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
+      const vog::eval::ClosureError e = vog::eval::closureError(lc, T_true);
+      closures_wrong += e.wrong ? 1 : 0;
+      closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
+    }
+    coverage = vog::eval::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
+    coverage_unaligned = vog::eval::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
+    if (!iterations.empty()) iterations.back().coverage = *coverage_unaligned;
+  }
 
   if (!out_dir.empty()) {
     std::error_code ec;
@@ -650,24 +895,29 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
          << r.plan_iteration << ',' << r.closures << ',' << (r.estimate_safe ? 1 : 0) << ',' << r.map_clearance_m << ','
          << r.true_clearance_m << '\n';
     }
-    // Observable points (in the map frame, after the alignment) and whether the final map covers them.
-    std::ofstream cp(std::filesystem::path(out_dir) / "coverage_points.csv");
-    cp << "x_m,y_m,z_m,covered\n";
-    for (std::size_t i = 0; i < observable_in_map.size(); ++i) {
-      const Eigen::Vector3d& p = observable_in_map[i];
-      cp << p.x() << ',' << p.y() << ',' << p.z() << ',' << (covered_flags[i] ? 1 : 0) << '\n';
-    }
-    std::ofstream cl(std::filesystem::path(out_dir) / "closures.csv");
-    cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong\n";
-    for (const ClosureRow& r : closure_rows) {
-      cl << r.closure->from << ',' << r.closure->to << ',' << r.closure->factor.rank() << ','
-         << r.closure->icp.fitness_m2 << ',' << r.correction_m << ',' << r.error.translation_m << ','
-         << r.error.rotation_rad * 180.0 / std::numbers::pi << ',' << (r.error.wrong ? 1 : 0) << '\n';
+    // Observable points (in the map frame, after the alignment) and whether the final map covers them;
+    // the closures against the truth. Both are the evaluation's.
+    std::ofstream cp, cl;
+    if (evaluate) {
+      cp.open(std::filesystem::path(out_dir) / "coverage_points.csv");
+      cp << "x_m,y_m,z_m,covered\n";
+      for (std::size_t i = 0; i < observable_in_map.size(); ++i) {
+        const Eigen::Vector3d& p = observable_in_map[i];
+        cp << p.x() << ',' << p.y() << ',' << p.z() << ',' << (covered_flags[i] ? 1 : 0) << '\n';
+      }
+      cl.open(std::filesystem::path(out_dir) / "closures.csv");
+      cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong\n";
+      for (const ClosureRow& r : closure_rows) {
+        cl << r.closure->from << ',' << r.closure->to << ',' << r.closure->factor.rank() << ','
+           << r.closure->icp.fitness_m2 << ',' << r.correction_m << ',' << r.error.translation_m << ','
+           << r.error.rotation_rad * 180.0 / std::numbers::pi << ',' << (r.error.wrong ? 1 : 0) << '\n';
+      }
     }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
-    mg << "sim_s,n_submaps,merge_ms,remerged\n";
+    mg << "sim_s,n_submaps,merge_ms,remerged,after_closure\n";
     for (const MergeRow& r : merges)
-      mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << '\n';
+      mg << r.sim_s << ',' << r.n_submaps << ',' << r.merge_ms << ',' << r.remerged << ',' << (r.after_closure ? 1 : 0)
+         << '\n';
     std::ofstream pa(std::filesystem::path(out_dir) / "path.csv");
     pa << "true_x_m,true_y_m,true_z_m,est_x_m,est_y_m,est_z_m\n";
     for (const auto& [T_true, T_est] : path_samples) {
@@ -678,7 +928,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     mp << "x_m,y_m,z_m\n";
     for (const Eigen::Vector3d& p : estimate) mp << p.x() << ',' << p.y() << ',' << p.z() << '\n';
     for (const std::ofstream* f : {&it, &mg, &pa, &mp, &co, &cp, &cl})
-      if (!*f) return fail("error while writing the CSV files in " + out_dir);
+      if (!*f && (evaluate || (f != &cp && f != &cl))) return fail("error while writing the CSV files in " + out_dir);
   }
 
   const double path_m = simulation.pathLengthM();
@@ -686,19 +936,39 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("scene", scene->name);
   out.add("mode", mode_name);
   out.add("seed", static_cast<std::int64_t>(seed));
+  out.add("path", scripted ? path_name : "exploration");
   out.add("end", end_reason);
-  out.add("coverage", coverage);
-  out.add("coverage_unaligned", coverage_unaligned);
-  out.add("rmse", error->rmse_m);
-  out.add("rmse_unaligned", error->rmse_unaligned_m);
+  if (evaluate) {
+    out.add("coverage", *coverage);
+    out.add("coverage_unaligned", *coverage_unaligned);
+    out.add("rmse", *rmse);
+    out.add("rmse_unaligned", *rmse_unaligned);
+  }
   if (rmse_same_run_odometry) out.add("rmse_same_run_odometry", *rmse_same_run_odometry);
   if (rmse_same_run_global_tree) out.add("rmse_same_run_global_tree", *rmse_same_run_global_tree);
   out.add("path_m", path_m);
   out.add("n_submaps", static_cast<std::int64_t>(nSubmaps()));
   out.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
+  // Submap base poses against the truth (no alignment: both start at the true pose), final
+  // estimates and raw odometry.
+  {
+    double se = 0.0, se_odom = 0.0;
+    std::size_t n = 0;
+    for (const slam::SubmapRecord& r : pipeline.submaps()) {
+      const auto it = base_truth.find(r.index);
+      if (it == base_truth.end()) continue;
+      se += (r.T_world_base.translation() - it->second.translation()).squaredNorm();
+      se_odom += (r.T_world_base_odom.translation() - it->second.translation()).squaredNorm();
+      ++n;
+    }
+    if (n > 0) {
+      out.add("base_pose_rmse_m", std::sqrt(se / static_cast<double>(n)));
+      out.add("base_pose_rmse_odometry_m", std::sqrt(se_odom / static_cast<double>(n)));
+    }
+  }
   // Loop-closure attempts and why the others were rejected (the reasons of LoopCloser).
   const slam::LoopCloseStats& lc = pipeline.loopStats();
-  out.add("closures_wrong", closures_wrong);
+  if (evaluate) out.add("closures_wrong", closures_wrong);
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
   std::string reasons;
@@ -726,10 +996,22 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
           static_cast<std::int64_t>(std::count_if(iterations.begin(), iterations.end(),
                                                   [](const IterationRow& r) { return r.global_candidates > 0; })));
   out.add("merge_ms_p95", merge_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_ms_all, 0.95));
+  std::vector<double> merge_after_closure_ms;
+  for (const MergeRow& r : merges)
+    if (r.after_closure) merge_after_closure_ms.push_back(r.merge_ms);
+  out.add("merge_after_closure_ms_p95",
+          merge_after_closure_ms.empty() ? 0.0 : vog::bench::percentile(merge_after_closure_ms, 0.95));
   out.add("merge_wait_ms_p95", merge_wait_ms_all.empty() ? 0.0 : vog::bench::percentile(merge_wait_ms_all, 0.95));
   out.add("collisions", static_cast<std::int64_t>(collisions));
   out.add("revisits", static_cast<std::int64_t>(controller.revisits()));
-  out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
+  if (scripted) {
+    out.add("survey_passes", survey_passes);
+    out.add("plan_errors", static_cast<std::int64_t>(plan_errors));
+    if (!last_plan_error.empty()) out.add("last_plan_error", last_plan_error);
+  }
+  if (evaluate) out.add("observable_points", static_cast<std::int64_t>(observable->points.size()));
+  out.add("rss_mb", missionStatusMb("VmRSS"));
+  out.add("hwm_mb", missionStatusMb("VmHWM"));
   std::cout << out.str();
   return 0;
 }

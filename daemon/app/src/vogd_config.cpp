@@ -106,6 +106,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.number("depth_stddev_m", c.depth_stddev_m, 1e-4, 10.0);
   m.degrees("roll_pitch_stddev_deg", c.roll_pitch_stddev_rad, 1e-3, 45.0);
   m.boolean("optimize_every_submap", c.optimize_every_submap);
+  m.boolean("optimize_closed_loop_only", c.optimize_closed_loop_only);
   m.finish();
 }
 
@@ -398,6 +399,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   ConfigMap merge = root.map("merge");
   merge.number("remerge_translation_m", c.merge.remerge_translation_m, 0.0, 10.0);
   merge.degrees("remerge_rotation_deg", c.merge.remerge_rotation_rad, 0.0, 180.0);
+  merge.integer("threads", c.merge.threads, 0, 64);
   merge.finish();
   readPlanner(root.map("planner"), c.planner, c.revisit);
   readNav(root.map("nav"), c.nav);

@@ -1,9 +1,39 @@
 #include "vog/map/merge_worker.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <system_error>
 #include <utility>
 
 namespace vog::map {
+
+int mergeThreadCount(const MergeConfig& config) {
+  constexpr int kMaxDefault = 4;
+  if (config.threads > 0) return config.threads;
+  const auto hardware = static_cast<int>(std::thread::hardware_concurrency());
+  return std::clamp(hardware, 1, kMaxDefault);
+}
+
+MergeThreads spawnMergeThreads(int tasks) {
+  MergeThreads threads;
+  threads.tasks = std::max(1, tasks);
+  if (threads.tasks == 1) return threads;
+  threads.run = [n = threads.tasks](const std::function<void(int)>& task) {
+    std::vector<std::thread> helpers;
+    helpers.reserve(static_cast<std::size_t>(n - 1));
+    std::vector<int> inline_tasks{0};
+    for (int t = 1; t < n; ++t) {
+      try {
+        helpers.emplace_back(task, t);
+      } catch (const std::system_error&) {
+        inline_tasks.push_back(t);
+      }
+    }
+    for (int t : inline_tasks) task(t);
+    for (std::thread& h : helpers) h.join();
+  };
+  return threads;
+}
 
 Result<std::unique_ptr<MergeWorker>> MergeWorker::create(const GridConfig& grid, const MergeConfig& merge) {
   if (auto st = merge.validate(); !st) return st.error();
@@ -15,15 +45,17 @@ Result<std::unique_ptr<MergeWorker>> MergeWorker::create(const GridConfig& grid,
 }
 
 MergeWorker::MergeWorker(std::unique_ptr<MergedMap> merged, const MergeConfig& merge)
-    : config_(merge), merged_(std::move(merged)) {}
+    : config_(merge), threads_(spawnMergeThreads(mergeThreadCount(merge))), merged_(std::move(merged)) {}
 
 MergeWorker::~MergeWorker() { stop(); }
 
 void MergeWorker::stop() {
-  cancel_ = true;
   {
+    // cancel_ is set under the lock: a merge that saw it and then takes the lock sees stopping_ too, so
+    // its cancellation is never reported as a failed merge.
     const std::lock_guard lock(mutex_);
     stopping_ = true;
+    cancel_ = true;
     pending_.reset();
   }
   wake_.notify_all();
@@ -89,7 +121,8 @@ void MergeWorker::run() {
 
     const auto t0 = std::chrono::steady_clock::now();
     // A shutdown does not wait for a whole re-merge: the merged map is rebuilt from the submaps on resume.
-    auto stats = merged_->sync(entries, config_, [this] { return cancel_.load(); });
+    auto stats = merged_->sync(
+        entries, config_, [this] { return cancel_.load(); }, threads_);
     std::shared_ptr<const MergedMap> snapshot;
     if (stats) snapshot = merged_->snapshot();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

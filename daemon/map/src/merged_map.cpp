@@ -4,8 +4,10 @@
 
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 namespace vog::map {
 
@@ -20,10 +22,12 @@ Status MergeConfig::validate() const {
     return Error{"merge.remerge_translation_m must be finite and >= 0, got " + std::to_string(remerge_translation_m)};
   if (!(remerge_rotation_rad >= 0.0) || !std::isfinite(remerge_rotation_rad))
     return Error{"merge.remerge_rotation_rad must be finite and >= 0, got " + std::to_string(remerge_rotation_rad)};
+  if (threads < 0 || threads > 64) return Error{"merge.threads must be in [0, 64], got " + std::to_string(threads)};
   return {};
 }
 
 std::uint64_t MergedMap::packBlock(const VoxelKey& b) {
+  static_assert(kPackBits == 21, "shardOf() reads the y block coordinate at bit 21");
   return (static_cast<std::uint64_t>(b.x() + kPackBias) & kPackMask) |
          ((static_cast<std::uint64_t>(b.y() + kPackBias) & kPackMask) << kPackBits) |
          ((static_cast<std::uint64_t>(b.z() + kPackBias) & kPackMask) << (2 * kPackBits));
@@ -46,7 +50,8 @@ Result<std::unique_ptr<MergedMap>> MergedMap::create(const GridConfig& config) {
 }
 
 const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
-  return blocks_.find(packBlock(blockOf(key)));
+  const std::uint64_t packed = packBlock(blockOf(key));
+  return shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
 }
 
 VoxelValue MergedMap::valueOf(const Block& block, int index) const {
@@ -82,7 +87,7 @@ std::vector<LineSample> MergedMap::lineQuery(const Eigen::Vector3d& p1, const Ei
     const std::uint64_t packed = packBlock(blockOf(key));
     if (packed != block_packed) {
       block_packed = packed;
-      block = blocks_.find(packed);
+      block = shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
     }
     out.push_back({x, block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{}});
   }
@@ -116,7 +121,7 @@ Status MergedMap::add(const SubmapEntry& entry) {
   if (merged_.count(entry.id) != 0) return Error{"merge: submap " + std::to_string(entry.id) + " is already merged"};
   if (merged_.size() >= std::numeric_limits<std::uint16_t>::max()) return Error{"merge: too many submaps (65535)"};
   ++version_;
-  apply(entry, +1);
+  applySerial({&entry, +1, version_});
   merged_.emplace(entry.id, entry);
   return {};
 }
@@ -125,13 +130,13 @@ Status MergedMap::remove(SubmapId id) {
   const auto it = merged_.find(id);
   if (it == merged_.end()) return Error{"merge: submap " + std::to_string(id) + " is not merged"};
   ++version_;
-  apply(it->second, -1);
+  applySerial({&it->second, -1, version_});
   merged_.erase(it);
   return {};
 }
 
 Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config,
-                                  const std::function<bool()>& cancelled) {
+                                  const std::function<bool()>& cancelled, const MergeThreads& threads) {
   const auto stop = [&] { return cancelled && cancelled(); };
   const Error cancel_error{"merge: cancelled"};
   if (auto s = config.validate(); !s) return s.error();
@@ -142,53 +147,126 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     if (!e.grid || !e.grid->finalized()) return Error{"merge: submap " + std::to_string(e.id) + " is not finalized"};
     if (std::abs(e.grid->resolution() - config_.resolution_m) > 1e-12)
       return Error{"merge: submap " + std::to_string(e.id) + " has a different resolution"};
-    if (!geometry::isValidPose(e.T_world_submap))
+    if (!geometry::isValidPose(e.T_world_submap) || !geometry::isValidPose(e.T_submap_world))
       return Error{"merge: pose of submap " + std::to_string(e.id) + " is not a finite rigid transform"};
   }
+  if (entries.size() > std::numeric_limits<std::uint16_t>::max()) return Error{"merge: too many submaps (65535)"};
+
+  // The submaps to merge out and in, in the order a submap-by-submap sync takes them: the vanished ones
+  // (by id), then `entries` in order, a moved one out at its old pose and in at its new one.
   SyncStats stats;
-  std::vector<SubmapId> gone;
+  std::vector<MergeOp> ops;
+  std::uint64_t version = version_;
+  std::size_t unchanged = 0;
   for (const auto& [id, e] : merged_) {
-    if (wanted.count(id) == 0) gone.push_back(id);
-  }
-  for (SubmapId id : gone) {
-    if (stop()) return cancel_error;
-    (void)remove(id);
+    if (wanted.count(id) != 0) continue;
+    ops.push_back({&e, -1, ++version});
     ++stats.removed;
   }
+  const bool exact = config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0;
   for (const auto& e : entries) {
-    if (stop()) return cancel_error;
     const auto it = merged_.find(e.id);
     if (it == merged_.end()) {
-      if (auto s = add(e); !s) return s.error();
+      ops.push_back({&e, +1, ++version});
       ++stats.added;
       continue;
     }
     const SubmapEntry& old = it->second;
     // Moves accumulate against the pose the submap was merged at, so many small ones still trigger.
     const bool same_pose = old.T_world_submap.matrix() == e.T_world_submap.matrix();
-    const bool exact = config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0;
     const bool beyond_tolerance =
         geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
         geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad;
     const bool moved = old.grid != e.grid || (!same_pose && (exact || beyond_tolerance));
-    if (!moved) continue;
-    (void)remove(e.id);
-    if (auto s = add(e); !s) return s.error();
+    if (!moved) {
+      ++unchanged;
+      continue;
+    }
+    ops.push_back({&old, -1, ++version});
+    ops.push_back({&e, +1, ++version});
     ++stats.remerged;
   }
+  // Merging everything from scratch costs one pass per entry, the incremental way one per vanished
+  // submap and two per moved one.
+  const auto moved_or_gone = static_cast<std::size_t>(stats.removed + stats.remerged);
+  if (unchanged < moved_or_gone && !merged_.empty()) return rebuild(entries, stats, cancelled, threads);
+
+  const auto record = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const MergeOp& op = ops[k];
+      version_ = op.version;
+      const SubmapId id = op.entry->id;
+      if (op.sign < 0) {
+        merged_.erase(id);  // `op.entry` pointed into merged_: not used again
+      } else {
+        merged_.insert_or_assign(id, *op.entry);
+      }
+    }
+  };
+  const bool parallel = threads.tasks > 1 && threads.run;
+  const std::size_t group = parallel ? kParallelGroup : 1;
+  std::vector<std::vector<Contribution>> scratch;
+  for (std::size_t begin = 0; begin < ops.size(); begin += group) {
+    if (stop()) return cancel_error;
+    const std::size_t end = std::min(ops.size(), begin + group);
+    if (parallel) {
+      applyParallel(ops, begin, end, threads, scratch);
+    } else {
+      applySerial(ops[begin]);
+    }
+    record(begin, end);
+  }
+  if (ops.empty() && !entries.empty() && stop()) return cancel_error;
   return stats;
 }
 
-void MergedMap::apply(const SubmapEntry& entry, int sign) {
+Result<SyncStats> MergedMap::rebuild(const std::vector<SubmapEntry>& entries, SyncStats stats,
+                                     const std::function<bool()>& cancelled, const MergeThreads& threads) {
+  std::vector<MergeOp> ops;
+  ops.reserve(entries.size());
+  for (std::size_t k = 0; k < entries.size(); ++k) ops.push_back({&entries[k], +1, version_ + k + 1});
+  std::array<Shard, kShards> old = std::move(shards_);
+  shards_ = {};
+  const bool parallel = threads.tasks > 1 && threads.run;
+  const std::size_t group = parallel ? kParallelGroup : 1;
+  std::vector<std::vector<Contribution>> scratch;
+  for (std::size_t begin = 0; begin < ops.size(); begin += group) {
+    if (cancelled && cancelled()) {
+      shards_ = std::move(old);  // as it was: nothing of the new merge is kept
+      return Error{"merge: cancelled"};
+    }
+    const std::size_t end = std::min(ops.size(), begin + group);
+    if (parallel) {
+      applyParallel(ops, begin, end, threads, scratch);
+    } else {
+      applySerial(ops[begin]);
+    }
+  }
+  version_ += entries.size();
+  // Removal records: blocks that existed and are gone now were erased at this version; earlier records
+  // stay for blocks still absent.
+  for (std::size_t s = 0; s < shards_.size(); ++s) {
+    Shard& now = shards_[s];
+    const Shard& before = old[s];
+    for (const auto& [packed, at] : before.removed) {
+      if (now.blocks.find(packed) == nullptr) now.removed.emplace(packed, at);
+    }
+    before.blocks.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>&) {
+      if (now.blocks.find(packed) == nullptr) now.removed[packed] = version_;
+    });
+  }
+  merged_.clear();
+  for (const auto& e : entries) merged_.emplace(e.id, e);
+  return stats;
+}
+
+template <class Sink>
+void MergedMap::evaluate(const MergeOp& op, Sink&& sink) const {
+  const SubmapEntry& entry = *op.entry;
   const double res = config_.resolution_m;
   const Eigen::Matrix3d R = entry.T_world_submap.linear();
   const Eigen::Matrix3d R_abs = R.cwiseAbs();
   const Eigen::Vector3d t = entry.T_world_submap.translation();
-
-  Block* block = nullptr;
-  std::uint64_t block_packed = ~std::uint64_t{0};
-  std::vector<std::uint64_t> emptied;
-
   entry.grid->forEachLeaf([&](const LocalGrid::Leaf& leaf) {
     // World box of the leaf's rotated cube; global centres inside it are the candidates.
     const Eigen::Vector3d lo = leaf.min.cast<double>() * res;
@@ -204,50 +282,102 @@ void MergedMap::apply(const SubmapEntry& entry, int sign) {
     }
     // One addition updates sum and count together: value * 2^16 + 1 (times the sign).
     const std::int64_t delta =
-        sign * (std::llround(static_cast<double>(leaf.log_odds) * kFixedScale) * (std::int64_t{1} << kCountBits) + 1);
+        op.sign *
+        (std::llround(static_cast<double>(leaf.log_odds) * kFixedScale) * (std::int64_t{1} << kCountBits) + 1);
     VoxelKey g;
     for (g.z() = gmin.z(); g.z() <= gmax.z(); ++g.z()) {
       for (g.y() = gmin.y(); g.y() <= gmax.y(); ++g.y()) {
         for (g.x() = gmin.x(); g.x() <= gmax.x(); ++g.x()) {
           const VoxelKey local = pointToKey(entry.toSubmap(keyToCentre(g, res)), inv_resolution_);
           if ((local.array() < leaf.min.array()).any() || (local.array() > leaf.max.array()).any()) continue;
-          const std::uint64_t packed = packBlock(blockOf(g));
-          if (packed != block_packed) {
-            block_packed = packed;
-            auto& slot = blocks_.slot(packed);
-            if (!slot) {
-              slot = std::make_shared<Block>();
-              slot->generation = generation_;
-              removed_.erase(packed);
-            } else if (slot->generation != generation_) {
-              // A snapshot taken since the block was made may hold it: copy on write. (Not use_count():
-              // a reader dropping its snapshot is a relaxed decrement that orders nothing against its
-              // last reads of the block.)
-              slot = std::make_shared<Block>(*slot);
-              slot->generation = generation_;
-            }
-            block = slot.get();
-            block->version = version_;
-          }
-          const auto i = static_cast<std::size_t>(indexIn(g));
-          const std::uint32_t before = block->count(i);
-          block->packed[i] += delta;
-          if (before == 0) ++block->n_known;
-          if (block->count(i) == 0) {
-            --block->n_known;
-            if (block->n_known == 0) emptied.push_back(packed);
-          }
+          sink(packBlock(blockOf(g)), static_cast<std::size_t>(indexIn(g)), delta);
         }
       }
     }
   });
-  for (std::uint64_t packed : emptied) {
-    const Block* b = blocks_.find(packed);
+}
+
+void MergedMap::applyParallel(const std::vector<MergeOp>& ops, std::size_t begin, std::size_t end,
+                              const MergeThreads& threads, std::vector<std::vector<Contribution>>& scratch) {
+  const auto tasks = static_cast<std::size_t>(std::min(threads.tasks, kShards));
+  const std::size_t n = end - begin;
+  if (scratch.size() < n * tasks) scratch.resize(n * tasks);
+  for (auto& list : scratch) list.clear();
+  // Phase 1: each op evaluated by one task, read-only, into one list per owner of the shards it touches.
+  threads.run([&](int task) {
+    if (static_cast<std::size_t>(task) >= tasks) return;  // more threads than shards: idle
+    for (std::size_t k = static_cast<std::size_t>(task); k < n; k += tasks) {
+      std::vector<Contribution>* lists = &scratch[k * tasks];
+      evaluate(ops[begin + k], [&](std::uint64_t packed, std::size_t index, std::int64_t delta) {
+        lists[static_cast<std::size_t>(shardOf(packed)) % tasks].push_back(
+            {packed, delta, static_cast<std::uint32_t>(index)});
+      });
+    }
+  });
+  // Phase 2: each task writes only its shards, op by op in order.
+  threads.run([&](int task) {
+    if (static_cast<std::size_t>(task) >= tasks) return;
+    WriteCursor cursor;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint64_t version = ops[begin + k].version;
+      for (const Contribution& c : scratch[k * tasks + static_cast<std::size_t>(task)]) {
+        addVoxel(cursor, c.packed, c.index, c.delta, version);
+      }
+      finishOp(cursor, version);
+    }
+  });
+}
+
+void MergedMap::applySerial(const MergeOp& op) {
+  WriteCursor cursor;
+  evaluate(op, [&](std::uint64_t packed, std::size_t index, std::int64_t delta) {
+    addVoxel(cursor, packed, index, delta, op.version);
+  });
+  finishOp(cursor, op.version);
+}
+
+void MergedMap::addVoxel(WriteCursor& cursor, std::uint64_t packed, std::size_t index, std::int64_t delta,
+                         std::uint64_t version) {
+  if (packed != cursor.packed) {
+    cursor.packed = packed;
+    Shard& shard = shards_[static_cast<std::size_t>(shardOf(packed))];
+    auto& slot = shard.blocks.slot(packed);
+    if (!slot) {
+      slot = std::make_shared<Block>();
+      slot->generation = generation_;
+      shard.removed.erase(packed);
+    } else if (slot->generation != generation_) {
+      // A snapshot taken since the block was made may hold it: copy on write. (Not use_count(): a reader
+      // dropping its snapshot is a relaxed decrement that orders nothing against its last reads of the
+      // block.)
+      slot = std::make_shared<Block>(*slot);
+      slot->generation = generation_;
+    }
+    cursor.block = slot.get();
+    cursor.block->version = version;
+  }
+  Block* block = cursor.block;
+  const std::uint32_t before = block->count(index);
+  block->packed[index] += delta;
+  if (before == 0) ++block->n_known;
+  if (block->count(index) == 0) {
+    --block->n_known;
+    if (block->n_known == 0) cursor.emptied.push_back(packed);
+  }
+}
+
+void MergedMap::finishOp(WriteCursor& cursor, std::uint64_t version) {
+  for (std::uint64_t packed : cursor.emptied) {
+    Shard& shard = shards_[static_cast<std::size_t>(shardOf(packed))];
+    const Block* b = shard.blocks.find(packed);
     if (b != nullptr && b->n_known == 0) {
-      blocks_.erase(packed);
-      removed_[packed] = version_;
+      shard.blocks.erase(packed);
+      shard.removed[packed] = version;
     }
   }
+  cursor.emptied.clear();
+  cursor.block = nullptr;
+  cursor.packed = ~std::uint64_t{0};
 }
 
 std::shared_ptr<const MergedMap> MergedMap::snapshot() {
@@ -257,41 +387,57 @@ std::shared_ptr<const MergedMap> MergedMap::snapshot() {
 
 std::size_t MergedMap::knownVoxelCount() const {
   std::size_t n = 0;
-  blocks_.forEach([&](std::uint64_t, const std::shared_ptr<Block>& block) { n += block->n_known; });
+  for (const Shard& shard : shards_) {
+    shard.blocks.forEach([&](std::uint64_t, const std::shared_ptr<Block>& block) { n += block->n_known; });
+  }
+  return n;
+}
+
+std::size_t MergedMap::blockCount() const {
+  std::size_t n = 0;
+  for (const Shard& shard : shards_) n += shard.blocks.size();
   return n;
 }
 
 std::size_t MergedMap::memoryBytes() const {
   // Blocks with their shared_ptr control blocks (make_shared: one allocation), and the table.
   const std::size_t per_block = sizeof(Block) + 2 * sizeof(long) + 16;
-  return blocks_.size() * per_block + blocks_.memoryBytes();
+  std::size_t table_bytes = 0;
+  for (const Shard& shard : shards_) table_bytes += shard.blocks.memoryBytes();
+  return blockCount() * per_block + table_bytes;
 }
 
 std::vector<std::pair<VoxelKey, std::shared_ptr<const MergedMap::Block>>> MergedMap::blocksChangedSince(
     std::uint64_t since_version) const {
   std::vector<std::pair<VoxelKey, std::shared_ptr<const Block>>> out;
-  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
-    if (block->version > since_version) out.emplace_back(unpackBlock(packed) * kBlockSide, block);
-  });
+  for (const Shard& shard : shards_) {
+    shard.blocks.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
+      if (block->version > since_version) out.emplace_back(unpackBlock(packed) * kBlockSide, block);
+    });
+  }
   return out;
 }
 
 std::vector<VoxelKey> MergedMap::blocksRemovedSince(std::uint64_t since_version) const {
   std::vector<VoxelKey> out;
   if (since_version == 0) return out;  // the map at version 0 is empty: nothing of it can have gone
-  for (const auto& [packed, version] : removed_) {
-    if (version > since_version) out.push_back(unpackBlock(packed) * kBlockSide);
+  for (const Shard& shard : shards_) {
+    for (const auto& [packed, version] : shard.removed) {
+      if (version > since_version) out.push_back(unpackBlock(packed) * kBlockSide);
+    }
   }
   return out;
 }
 
 bool MergedMap::sameVoxels(const MergedMap& other) const {
-  if (blocks_.size() != other.blocks_.size()) return false;
+  if (blockCount() != other.blockCount()) return false;
   bool same = true;
-  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
-    const Block* theirs = other.blocks_.find(packed);
-    same = same && theirs != nullptr && block->packed == theirs->packed;
-  });
+  for (std::size_t s = 0; s < shards_.size(); ++s) {
+    shards_[s].blocks.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
+      const Block* theirs = other.shards_[s].blocks.find(packed);
+      same = same && theirs != nullptr && block->packed == theirs->packed;
+    });
+  }
   return same;
 }
 

@@ -3,7 +3,9 @@
 #include "vog/slam/information.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
+#include <string>
 
 namespace vog::slam {
 
@@ -19,8 +21,9 @@ bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b) {
   return (c_a.array() >= a.aabb_min_submap.array()).all() && (c_a.array() <= a.aabb_max_submap.array()).all();
 }
 
-Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(const std::vector<SubmapFootprint>& submaps,
-                                                                            const CandidateConfig& config) {
+namespace {
+
+Status checkFootprints(const std::vector<SubmapFootprint>& submaps, const CandidateConfig& config) {
   if (Status s = config.validate(); !s) return s.error();
   for (const SubmapFootprint& s : submaps) {
     const std::string name = "loop candidates: submap " + std::to_string(s.index);
@@ -32,17 +35,47 @@ Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(cons
       return Error{name + " has a bounding box with min > max"};
     }
   }
+  return Status::success();
+}
+
+// The gate of one pair (a before b in the list): Alg. 6 lines 4-8.
+bool isCandidatePair(const SubmapFootprint& a, const SubmapFootprint& b, const CandidateConfig& config) {
+  if (std::llabs(a.index - b.index) < config.min_index_gap) return false;
+  if (a.n_points < config.min_points || b.n_points < config.min_points) return false;
+  return centroidInside(a, b) || centroidInside(b, a);
+}
+
+}  // namespace
+
+Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(const std::vector<SubmapFootprint>& submaps,
+                                                                            const CandidateConfig& config) {
+  if (Status s = checkFootprints(submaps, config); !s) return s.error();
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t i = 0; i < submaps.size(); ++i) {
     for (std::size_t j = i + 1; j < submaps.size(); ++j) {
-      const SubmapFootprint& a = submaps[i];
-      const SubmapFootprint& b = submaps[j];
-      if (std::llabs(a.index - b.index) < config.min_index_gap) continue;
-      if (a.n_points < config.min_points || b.n_points < config.min_points) continue;
-      if (centroidInside(a, b) || centroidInside(b, a)) pairs.emplace_back(i, j);
+      if (isCandidatePair(submaps[i], submaps[j], config)) pairs.emplace_back(i, j);
     }
   }
   return pairs;
+}
+
+Result<std::vector<std::size_t>> findLoopCandidatesOf(const std::vector<SubmapFootprint>& submaps, std::size_t newest,
+                                                      const CandidateConfig& config) {
+  if (Status s = checkFootprints(submaps, config); !s) return s.error();
+  if (newest >= submaps.size()) {
+    return Error{"loop candidates: newest position " + std::to_string(newest) + " is out of range (" +
+                 std::to_string(submaps.size()) + " submaps)"};
+  }
+  std::vector<std::size_t> partners;
+  const SubmapFootprint& n = submaps[newest];
+  if (n.n_points < config.min_points) return partners;  // no pair with it passes line 4
+  for (std::size_t k = 0; k < submaps.size(); ++k) {
+    if (k == newest) continue;
+    // The pair as findLoopCandidates orders it: the earlier position first.
+    const bool candidate = k < newest ? isCandidatePair(submaps[k], n, config) : isCandidatePair(n, submaps[k], config);
+    if (candidate) partners.push_back(k);
+  }
+  return partners;
 }
 
 Result<double> planarMahalanobisSquared(const geometry::Pose3& T_registered, const geometry::Pose3& T_predicted,

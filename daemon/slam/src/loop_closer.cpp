@@ -20,6 +20,8 @@ std::string reasonKey(const IcpResult& r, const IcpAcceptance& a) {
   return "acceptance";
 }
 
+}  // namespace
+
 SubmapFootprint footprintOf(const LoopSubmap& s) {
   SubmapFootprint f;
   f.index = s.index;
@@ -33,8 +35,6 @@ SubmapFootprint footprintOf(const LoopSubmap& s) {
   f.n_points = s.grid->cloud().size();
   return f;
 }
-
-}  // namespace
 
 const char* toString(LoopClosureMode mode) { return mode == LoopClosureMode::kPointToPoint2d ? "p2p" : "degenerate"; }
 
@@ -100,8 +100,32 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
   std::vector<SubmapFootprint> footprints;
   footprints.reserve(submaps.size());
   for (const LoopSubmap& s : submaps) footprints.push_back(footprintOf(s));
-  auto pairs = findLoopCandidates(footprints, config_.candidates);
-  if (!pairs) return Error{"loop closer: " + pairs.error().message};
+  return closeLoops(submaps, footprints, newest);
+}
+
+Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& submaps,
+                                                const std::vector<SubmapFootprint>& footprints,
+                                                std::size_t newest) const {
+  if (newest >= submaps.size()) {
+    return Error{"loop closer: newest position " + std::to_string(newest) + " is out of range (" +
+                 std::to_string(submaps.size()) + " submaps)"};
+  }
+  if (footprints.size() != submaps.size()) {
+    return Error{"loop closer: " + std::to_string(footprints.size()) + " footprints for " +
+                 std::to_string(submaps.size()) + " submaps"};
+  }
+  for (std::size_t k = 0; k < submaps.size(); ++k) {
+    const LoopSubmap& s = submaps[k];
+    if (!s.grid || !s.grid->finalized()) {
+      return Error{"loop closer: submap " + std::to_string(s.index) + " has no finalized grid"};
+    }
+    if (footprints[k].index != s.index) {
+      return Error{"loop closer: footprint " + std::to_string(footprints[k].index) + " at the position of submap " +
+                   std::to_string(s.index)};
+    }
+  }
+  auto partners = findLoopCandidatesOf(footprints, newest, config_.candidates);
+  if (!partners) return Error{"loop closer: " + partners.error().message};
 
   // The point-to-point mode's fitness and overlap are measured differently and have their own bounds.
   const bool p2p = config_.mode == LoopClosureMode::kPointToPoint2d;
@@ -111,9 +135,8 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
 
   LoopCloseOutcome out;
   const LoopSubmap& source = submaps[newest];
-  for (const auto& [i, j] : pairs.value()) {
-    if (i != newest && j != newest) continue;
-    const LoopSubmap& target = submaps[i == newest ? j : i];
+  for (const std::size_t k : partners.value()) {
+    const LoopSubmap& target = submaps[k];
     const double dyaw = geometry::wrapAngle(geometry::yawOf(source.T_world_submap.linear()) -
                                             geometry::yawOf(target.T_world_submap.linear()));
     if (std::abs(dyaw) > config_.max_heading_difference_rad) {

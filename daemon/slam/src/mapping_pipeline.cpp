@@ -3,6 +3,7 @@
 #include "vog/slam/information.hpp"
 #include "vog/slam/pose_vector.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <utility>
@@ -124,6 +125,8 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingP
     record.n_scans = c.n_scans;
     record.reason = c.reason;
     p.submaps_.push_back(record);
+    p.loop_submaps_.push_back({id, c.grid, pose.value(), c.first_stamp_ns});
+    p.footprints_.push_back(footprintOf(p.loop_submaps_.back()));
     poses.push_back(pose.value());
     if (Status s = p.map_->addSubmap(static_cast<map::SubmapId>(id), c.grid, pose.value()); !s.ok()) {
       return Error{"restore: " + s.error().message};
@@ -196,7 +199,6 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   }
 
   // Loop closures against the other submaps at their current estimates.
-  std::vector<SubmapRecord> records = submaps_;
   SubmapRecord record;
   record.index = id;
   record.T_world_base_odom = closed.T_world_base_odom;
@@ -205,17 +207,21 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   record.last_stamp_ns = closed.last_stamp_ns;
   record.n_scans = closed.n_scans;
   record.reason = closed.reason;
-  records.push_back(record);
 
-  const std::vector<map::SubmapEntry> entries = map_->entries();
+  const LoopSubmap fresh{id, closed.grid, T_world_init, closed.first_stamp_ns};
+  const bool grid_ok = closed.grid && closed.grid->finalized();
   if (config_.loop_closures) {
-    std::vector<LoopSubmap> loop_submaps;
-    loop_submaps.reserve(records.size());
-    for (std::size_t k = 0; k < entries.size(); ++k) {
-      loop_submaps.push_back({records[k].index, entries[k].grid, records[k].T_world_base, records[k].first_stamp_ns});
+    // The new submap joins the kept lists for the search only; it is committed below.
+    Result<LoopCloseOutcome> outcome = Error{""};
+    loop_submaps_.push_back(fresh);
+    if (grid_ok) {
+      footprints_.push_back(footprintOf(fresh));
+      outcome = closer_.closeLoops(loop_submaps_, footprints_, loop_submaps_.size() - 1);
+      footprints_.pop_back();
+    } else {
+      outcome = closer_.closeLoops(loop_submaps_, loop_submaps_.size() - 1);  // names the bad grid
     }
-    loop_submaps.push_back({id, closed.grid, T_world_init, closed.first_stamp_ns});
-    auto outcome = closer_.closeLoops(loop_submaps, loop_submaps.size() - 1);
+    loop_submaps_.pop_back();
     if (!outcome) return Error{"mapping: " + outcome.error().message};
     for (const LoopClosure& c : outcome->closures) {
       if (Status s = graph.addPartialLoopClosure(c.from, c.to, c.factor); !s.ok()) {
@@ -227,33 +233,48 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   }
 
   if (!update.closures.empty() || config_.optimize_every_submap) {
-    auto result = graph.optimize();
+    NodeId first_free = id;
+    for (const LoopClosure& c : update.closures) first_free = std::min(first_free, c.from);
+    auto result = config_.optimize_closed_loop_only ? graph.optimizeFrom(first_free) : graph.optimize();
     if (!result) return Error{"mapping: " + result.error().message};
     update.optimized = true;
     update.optimize = result.value();
   }
 
+  // Without an optimisation the other estimates did not change: their poses are the ones kept.
   std::vector<geometry::Pose3> poses;
-  poses.reserve(records.size());
-  for (SubmapRecord& r : records) {
+  poses.reserve(submaps_.size() + 1);
+  for (const SubmapRecord& r : submaps_) {
+    if (!update.optimized) {
+      poses.push_back(r.T_world_base);
+      continue;
+    }
     auto pose = graph.pose(r.index);
     if (!pose) return Error{"mapping: " + pose.error().message};
-    r.T_world_base = pose.value();
     poses.push_back(pose.value());
   }
+  auto new_pose = graph.pose(id);
+  if (!new_pose) return Error{"mapping: " + new_pose.error().message};
+  poses.push_back(new_pose.value());
 
   // Commit: the map first (the only step that can still fail), then the deformation (Alg. 1).
   if (Status s = map_->addSubmap(static_cast<map::SubmapId>(id), closed.grid, T_world_init); !s.ok()) {
     return Error{"mapping: " + s.error().message};
   }
   if (Status s = map_->deform(poses); !s.ok()) return Error{"mapping: deform: " + s.error().message};
-  for (std::size_t k = 0; k < entries.size(); ++k) {
-    if (entries[k].T_world_submap.matrix() != poses[k].matrix()) {
-      update.moved.push_back(entries[k].id);
-    }
+  // The map's poses are the records' (both set from the same vector at every commit).
+  for (std::size_t k = 0; k < submaps_.size(); ++k) {
+    if (submaps_[k].T_world_base.matrix() == poses[k].matrix()) continue;
+    update.moved.push_back(static_cast<map::SubmapId>(submaps_[k].index));
+    submaps_[k].T_world_base = poses[k];
+    loop_submaps_[k].T_world_submap = poses[k];
+    footprints_[k].T_world_submap = poses[k];
   }
+  record.T_world_base = poses.back();
+  submaps_.push_back(record);
+  loop_submaps_.push_back({id, closed.grid, poses.back(), closed.first_stamp_ns});
+  footprints_.push_back(footprintOf(loop_submaps_.back()));
   graph_ = std::move(graph);
-  submaps_ = std::move(records);
   for (const LoopClosure& c : update.closures) closures_.push_back(c);
   stats_.add(update.loop_stats);
   update.closed_submap = id;

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <iterator>
 #include <memory>
 #include <sstream>
 
@@ -603,8 +604,25 @@ Status PoseGraph::initializeChordal() {
 }
 
 Result<OptimizeResult> PoseGraph::optimize() {
-  OptimizeResult result;
   if (nodes_.empty()) return Error{"pose graph: nothing to optimize (no nodes)"};
+  return solve(nodes_.begin()->first);
+}
+
+Result<OptimizeResult> PoseGraph::optimizeFrom(NodeId first_free) {
+  if (nodes_.empty()) return Error{"pose graph: nothing to optimize (no nodes)"};
+  if (nodes_.lower_bound(first_free) == nodes_.end()) {
+    return Error{"pose graph: no node to optimize from " + std::to_string(first_free) + " on (the last is " +
+                 std::to_string(nodes_.rbegin()->first) + ")"};
+  }
+  return solve(first_free);
+}
+
+Result<OptimizeResult> PoseGraph::solve(NodeId first_free) {
+  OptimizeResult result;
+  const NodeId window_first = nodes_.lower_bound(first_free)->first;
+  const bool windowed = window_first != nodes_.begin()->first;
+  auto free = [&](NodeId id) { return id >= first_free; };
+  bool joins_held = false;  // some factor links a free node to a held one (fixes the window's gauge)
 
   std::map<NodeId, Vector6d> work = nodes_;  // the solver writes here; committed only on success
   std::map<NodeId, ComponentMask> constrained;
@@ -615,6 +633,8 @@ Result<OptimizeResult> PoseGraph::optimize() {
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
   for (const RelativeFactor& f : relative_) {
+    if (!free(f.from) && !free(f.to)) continue;
+    joins_held = joins_held || !free(f.from) || !free(f.to);
     ceres::CostFunction* cost = nullptr;
     ceres::LossFunction* loss = nullptr;
     switch (f.kind) {
@@ -649,6 +669,7 @@ Result<OptimizeResult> PoseGraph::optimize() {
     problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
   }
   for (const AbsoluteFactor& f : absolute_) {
+    if (!free(f.id)) continue;
     problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
         nullptr, work.at(f.id).data());
@@ -660,11 +681,13 @@ Result<OptimizeResult> PoseGraph::optimize() {
   // linear system at three unknowns per node without changing its solution.
   for (auto& [id, x] : work) {
     if (!problem.HasParameterBlock(x.data())) continue;
-    if (fixed_.count(id) != 0) {
+    if (fixed_.count(id) != 0 || !free(id)) {
       problem.SetParameterBlockConstant(x.data());
       continue;
     }
-    const bool anchored = config_.anchor_first_node && id == first_node_;
+    const bool anchored =
+        config_.anchor_first_node &&
+        (windowed ? !joins_held && id == (free(first_node_) ? first_node_ : window_first) : id == first_node_);
     std::vector<int> held;
     for (int i = 0; i < 6; ++i) {
       const bool gauge = anchored && (i == kX || i == kY || i == kYaw);
@@ -697,6 +720,7 @@ Result<OptimizeResult> PoseGraph::optimize() {
   const auto t0 = std::chrono::steady_clock::now();
   ceres::Solve(options, &problem, &summary);
   result.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  result.free_nodes = static_cast<int>(std::distance(nodes_.lower_bound(first_free), nodes_.end()));
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;  // iteration 0 is the initial state
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
@@ -708,8 +732,8 @@ Result<OptimizeResult> PoseGraph::optimize() {
   for (const auto& [id, x] : work) {
     if (!finite6(x)) return Error{"pose graph: solver produced a non-finite estimate for node " + std::to_string(id)};
   }
-  for (auto& [id, x] : work) {
-    for (int i = kRoll; i <= kYaw; ++i) x(i) = geometry::wrapAngle(x(i));
+  for (auto it = work.lower_bound(first_free); it != work.end(); ++it) {
+    for (int i = kRoll; i <= kYaw; ++i) it->second(i) = geometry::wrapAngle(it->second(i));
   }
   nodes_ = std::move(work);
   return result;

@@ -90,8 +90,10 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.depth_stddev_m, b.mapping.depth_stddev_m);
   EXPECT_NEAR(a.mapping.roll_pitch_stddev_rad, b.mapping.roll_pitch_stddev_rad, 1e-9);
   EXPECT_EQ(a.mapping.optimize_every_submap, b.mapping.optimize_every_submap);
+  EXPECT_EQ(a.mapping.optimize_closed_loop_only, b.mapping.optimize_closed_loop_only);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
+  EXPECT_EQ(a.merge.threads, b.merge.threads);
   const auto& pa = a.planner;
   const auto& pb = b.planner;
   EXPECT_EQ(pa.collision_box_m, pb.collision_box_m);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <limits>
 #include <numbers>
+#include <random>
 
 namespace vog::slam {
 namespace {
@@ -65,6 +66,60 @@ TEST(LoopCandidates, BadInputNamed) {
   CandidateConfig bad;
   bad.min_index_gap = 0;
   EXPECT_FALSE(findLoopCandidates({}, bad).ok());
+}
+
+// The search for one new submap lists exactly the pairs of the all-pairs definition that involve it, in
+// the same order, on random footprints (index gaps, sparse clouds, general poses), for every position.
+TEST(LoopCandidates, SearchForOneSubmapEqualsAllPairsDefinition) {
+  for (std::uint64_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::uniform_int_distribution<int> step(1, 3);
+    std::uniform_int_distribution<std::size_t> points(0, 60);
+    std::vector<SubmapFootprint> maps(80);
+    std::int64_t index = 0;
+    for (SubmapFootprint& f : maps) {
+      f.index = index;
+      index += step(rng);  // gaps as after a restore or a skipped submap
+      f.T_world_submap = geometry::poseFromXyzRpy(12.0 * u(rng), 12.0 * u(rng), u(rng), 0.1 * u(rng), 0.1 * u(rng),
+                                                  std::numbers::pi * u(rng));
+      const Eigen::Vector3d lo(-1.0 + 3.0 * u(rng), -4.0 + u(rng), -3.0 + u(rng));
+      f.aabb_min_submap = lo;
+      f.aabb_max_submap = lo + Eigen::Vector3d(3.0 + 3.0 * std::abs(u(rng)), 4.0 + 4.0 * std::abs(u(rng)), 2.0);
+      f.centroid_submap = 0.5 * (f.aabb_min_submap + f.aabb_max_submap) + Eigen::Vector3d(u(rng), u(rng), 0.0);
+      f.n_points = points(rng);
+    }
+    CandidateConfig config;
+    config.min_index_gap = 1 + static_cast<std::int64_t>(seed % 4);
+    config.min_points = 20;
+    const auto all = findLoopCandidates(maps, config);
+    ASSERT_TRUE(all.ok());
+    std::size_t found = 0;
+    for (std::size_t newest = 0; newest < maps.size(); ++newest) {
+      std::vector<std::size_t> expected;
+      for (const auto& [i, j] : *all) {
+        if (i == newest) expected.push_back(j);
+        if (j == newest) expected.push_back(i);
+      }
+      const auto mine = findLoopCandidatesOf(maps, newest, config);
+      ASSERT_TRUE(mine.ok());
+      EXPECT_EQ(*mine, expected) << "seed " << seed << ", newest " << newest;
+      found += mine->size();
+    }
+    EXPECT_EQ(found, 2 * all->size());
+    EXPECT_GT(all->size(), 20u) << "seed " << seed;  // the gate passes and rejects pairs
+    EXPECT_LT(all->size(), maps.size() * (maps.size() - 1) / 4) << "seed " << seed;
+  }
+}
+
+TEST(LoopCandidates, SearchForOneSubmapErrorsLikeAllPairs) {
+  std::vector<SubmapFootprint> maps{footprint(0, geometry::Pose3::Identity()),
+                                    footprint(7, geometry::Pose3::Identity())};
+  EXPECT_FALSE(findLoopCandidatesOf(maps, 2).ok());
+  maps[0].aabb_min_submap.x() = 9.0;  // min > max on a submap that is not the newest
+  auto r = findLoopCandidatesOf(maps, 1);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("submap 0"), std::string::npos) << r.error().message;
 }
 
 TEST(MahalanobisGate, DistanceUnderCovariance) {

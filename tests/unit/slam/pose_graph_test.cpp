@@ -157,6 +157,58 @@ TEST(PoseGraph, OdometryOnlyOptimumIsDeadReckoning) {
   }
 }
 
+// A chain with one loop: the nodes before the loop's older end hang off it as a tree, so the whole
+// graph's optimum leaves them where the chain puts them and optimising from that end reaches it too.
+TEST(PoseGraph, OptimizingFromALoopsOlderEndReachesTheWholeGraphsOptimum) {
+  const Scenario s = makeScenario(3, 40);
+  PoseGraph part = buildGraph(s, {});
+  Vector6d x = toXyzRpy(s.truth[8].inverse() * s.truth[28]);
+  x(kX) += 0.03;
+  x(kYaw) -= 0.005;
+  ASSERT_TRUE(part.addLoopClosure(8, 28, fromXyzRpy(x), closureInformation()).ok());
+  PoseGraph whole = part;
+  ASSERT_TRUE(whole.optimize().ok());
+  auto r = part.optimizeFrom(8);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(r->converged) << r->message;
+  EXPECT_EQ(r->free_nodes, 32);
+  EXPECT_LT(r->final_cost, r->initial_cost);
+  for (NodeId id = 0; id < 40; ++id) {
+    const Pose3 a = *part.pose(id);
+    const Pose3 b = *whole.pose(id);
+    EXPECT_LT(geometry::translationDistance(a, b), 1e-4) << "node " << id;
+    EXPECT_LT(geometry::rotationAngle(a, b), 1e-5) << "node " << id;
+  }
+}
+
+// With closures reaching before the free part, the held nodes keep their estimates bit for bit and act
+// as fixed ends of the closures that join them.
+TEST(PoseGraph, OptimizingFromANodeHoldsTheOlderNodesBitForBit) {
+  const Scenario s = makeScenario(4, 40);
+  PoseGraph g = buildGraph(s, {});
+  addTrueClosures(g, s, 21);
+  std::vector<Vector6d> before;
+  for (NodeId id = 0; id < 40; ++id) before.push_back(*g.estimate(id));
+  auto r = g.optimizeFrom(30);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->free_nodes, 10);
+  EXPECT_LT(r->final_cost, r->initial_cost);
+  int moved = 0;
+  for (NodeId id = 0; id < 40; ++id) {
+    const Vector6d now = *g.estimate(id);
+    if (id < 30) {
+      EXPECT_EQ(now, before[static_cast<std::size_t>(id)]) << "held node " << id;
+    } else if (now != before[static_cast<std::size_t>(id)]) {
+      ++moved;
+    }
+  }
+  EXPECT_EQ(moved, 10);
+  // A free part past the last node is an error that changes nothing.
+  auto none = g.optimizeFrom(40);
+  ASSERT_FALSE(none.ok());
+  EXPECT_NE(none.error().message.find("40"), std::string::npos) << none.error().message;
+}
+
 TEST(PoseGraph, LoopClosuresCorrectDrift) {
   const Scenario s = makeScenario(2, 40);
   PoseGraph g = buildGraph(s, {});

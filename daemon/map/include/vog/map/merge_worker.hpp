@@ -9,6 +9,9 @@
 // coalesce: a set submitted while an older one waits replaces it (sync() is idempotent on the newest
 // set, so nothing is lost). A failed merge is kept as error() and the worker stops merging; the last
 // good snapshot stays readable.
+// Threads: the merge thread owns merged_ and, inside each sync(), lends it MergeConfig::threads - 1
+// helper threads (see MergedMap: each task owns a disjoint set of the map's shards for that call); the
+// helpers are started and joined within the call, so between merges the merge thread is alone.
 // Determinism: waitIdle() returns once every submitted set is merged and published. A lockstep caller
 // that calls it at fixed points of simulated time (e.g. right before each submit) sees snapshots that
 // depend only on its inputs, while the merge still overlaps with its own work in between.
@@ -27,6 +30,14 @@
 #include <vector>
 
 namespace vog::map {
+
+// MergeConfig::threads resolved: 0 becomes std::thread::hardware_concurrency() (1 when unknown), at most 4.
+int mergeThreadCount(const MergeConfig& config);
+
+// Threads for MergedMap::sync: `tasks` tasks, task 0 on the calling thread, the others on threads
+// started for the call and joined before it returns (a merge takes milliseconds, starting a thread tens
+// of microseconds). A thread that cannot be started has its task run on the calling thread.
+MergeThreads spawnMergeThreads(int tasks);
 
 // One completed merge.
 struct MergeRecord {
@@ -66,6 +77,7 @@ class MergeWorker {
   void run();
 
   const MergeConfig config_;
+  const MergeThreads threads_;         // how sync() runs in parallel (immutable)
   std::unique_ptr<MergedMap> merged_;  // merge thread only
   mutable std::mutex mutex_;
   std::condition_variable wake_;                     // work arrived or stop
@@ -78,7 +90,7 @@ class MergeWorker {
   std::optional<Error> error_;                       // guarded by mutex_
   std::uint64_t heartbeat_ = 0;                      // guarded by mutex_
   bool stopping_ = false;                            // guarded by mutex_
-  std::atomic<bool> cancel_{false};                  // set by stop(); read by the merge in progress
+  std::atomic<bool> cancel_{false};  // set by stop() with mutex_ held (with stopping_); read by the merge in progress
   std::thread thread_;
 };
 

@@ -14,11 +14,19 @@
 // at every global voxel centre equals the sequential query there (Alg. 2) up to the fixed-point
 // rounding of each term (< 1e-9).
 //
-// Storage: 8x8x8 voxel blocks in a hash table. Blocks are shared copy-on-write with snapshots.
+// Storage: 8x8x8 voxel blocks in 16 hash tables (shards; a block's shard is fixed by the low bits of its
+// x and y block coordinates). Blocks are shared copy-on-write with snapshots.
 //
 // Lifecycle and threads: one writer (the merge thread) owns a MergedMap and calls add/remove/sync and
 // snapshot(). Readers (planner, API) only ever see `std::shared_ptr<const MergedMap>` snapshots, which
 // never change; the writer copies a block before changing one that a snapshot still holds.
+// Parallel merge: sync() may be lent threads (MergeThreads; the map creates none). The submaps to merge
+// in or out form one ordered list, taken 16 at a time in two phases while the writer thread waits:
+// first each task evaluates its share of the submaps, reading only them and the map's configuration, into
+// lists it alone fills; then task t of n alone writes the shards s with s % n == t (their blocks and
+// removal records), applying its lists submap by submap in list order. So every voxel sees the same
+// additions in the same order as in a serial merge, and the result (sums, counts, block versions,
+// removal records) does not depend on the number of threads.
 
 #include "vog/geometry/pose.hpp"
 #include "vog/core/result.hpp"
@@ -47,8 +55,18 @@ struct MergeConfig {
   // any change (exactness); the defaults keep every voxel of a 5.6 m submap within 1/20 resolution.
   double remerge_translation_m = 0.005;
   double remerge_rotation_rad = 0.0008;
+  // Threads of one merge (MergeWorker): 0 = std::thread::hardware_concurrency(), at most 4; 1 = serial.
+  // The merged map is the same for any number.
+  int threads = 0;
 
   Status validate() const;
+};
+
+// Threads lent to one sync() call: `run(task)` calls task(0) ... task(tasks - 1), each exactly once,
+// possibly concurrently, and returns when all have returned. tasks <= 1 or an empty `run`: serial.
+struct MergeThreads {
+  int tasks = 1;
+  std::function<void(const std::function<void(int)>& task)> run;
 };
 
 struct SyncStats {
@@ -87,11 +105,15 @@ class MergedMap {
   // Merges a submap out at the pose it was merged at.
   Status remove(SubmapId id);
   // Brings the map in line with `entries` (a VogMap's current list): merges new submaps, removes
-  // vanished ones, re-merges only submaps whose pose moved beyond the tolerance.
-  // `cancelled`, when given, is asked between submaps: once it says true, sync stops with an error and
-  // leaves the map part-way (for a writer that is shutting down and discards it).
+  // vanished ones, re-merges only submaps whose pose moved beyond the tolerance. When fewer submaps stay
+  // than move or vanish (a large loop closure), it merges all of `entries` from scratch instead (half
+  // the work of merging each moved submap out and back in; the same sums and counts, every block gets a
+  // new version). Everything is checked before anything changes.
+  // `cancelled`, when given, is asked by the calling thread between submaps (with threads, between
+  // groups of 16): once it says true, sync stops with an error and leaves the map part-way (consistent,
+  // for a writer that is shutting down and discards it); a merge from scratch leaves it as it was.
   Result<SyncStats> sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config,
-                         const std::function<bool()>& cancelled = {});
+                         const std::function<bool()>& cancelled = {}, const MergeThreads& threads = {});
   // An immutable copy sharing every block (O(number of blocks) pointer copies). Blocks are shared by
   // generation: a block made before the newest snapshot is never written again, only copied (the
   // writer decides alone, with no reference counts read across threads), so a reader may drop or
@@ -117,7 +139,7 @@ class MergedMap {
   std::uint64_t writerId() const { return writer_id_; }
   std::size_t submapCount() const { return merged_.size(); }
   bool contains(SubmapId id) const { return merged_.count(id) != 0; }
-  std::size_t blockCount() const { return blocks_.size(); }
+  std::size_t blockCount() const;
   std::size_t knownVoxelCount() const;
   std::size_t memoryBytes() const;
 
@@ -143,6 +165,25 @@ class MergedMap {
  private:
   explicit MergedMap(const GridConfig& config);
 
+  static constexpr int kShardBits = 4;
+  static constexpr int kShards = 1 << kShardBits;
+  // One shard: its blocks and the blocks it lost. During a parallel sync it is written by one task only.
+  struct alignas(64) Shard {
+    BlockTable<Block> blocks;
+    std::unordered_map<std::uint64_t, std::uint64_t> removed;  // packed block -> version it was erased at
+  };
+  // Blocks interleave over the shards in x and y (4 x 4), so any n tasks get even shares of any region.
+  static int shardOf(std::uint64_t packed) {
+    constexpr std::uint64_t kYShift = 21;  // kPackBits in merged_map.cpp
+    return static_cast<int>((packed & 3) | (((packed >> kYShift) & 3) << 2));
+  }
+  // One submap merged in (sign +1) or out (-1), with the map version it gets.
+  struct MergeOp {
+    const SubmapEntry* entry;
+    int sign;
+    std::uint64_t version;
+  };
+
   static std::uint64_t packBlock(const VoxelKey& block);
   static VoxelKey unpackBlock(std::uint64_t packed);
   static VoxelKey blockOf(const VoxelKey& key) {
@@ -154,15 +195,45 @@ class MergedMap {
   }
   const Block* findBlock(const VoxelKey& key) const;
   VoxelValue valueOf(const Block& block, int index) const;
-  // Adds (sign +1) or subtracts (sign -1) one submap at the entry's pose.
-  void apply(const SubmapEntry& entry, int sign);
+  // One voxel's change from one submap: what a parallel merge's first phase hands to the second.
+  struct Contribution {
+    std::uint64_t packed;  // block
+    std::int64_t delta;    // (fixed-point value << 16) + 1, times the sign
+    std::uint32_t index;   // voxel in the block
+  };
+  // The writer's place while it applies one op: the block last written and the blocks it emptied.
+  struct WriteCursor {
+    Block* block = nullptr;
+    std::uint64_t packed = ~std::uint64_t{0};
+    std::vector<std::uint64_t> emptied;
+  };
+  // Calls sink(packed block, voxel index, delta) for every global voxel the op's submap knows (reads only).
+  template <class Sink>
+  void evaluate(const MergeOp& op, Sink&& sink) const;
+  // Adds one contribution of the op with `version` (copy-on-write, block creation, emptied blocks).
+  void addVoxel(WriteCursor& cursor, std::uint64_t packed, std::size_t index, std::int64_t delta,
+                std::uint64_t version);
+  // Ends an op: erases the blocks it emptied, recorded as removed at `version`; resets the cursor.
+  void finishOp(WriteCursor& cursor, std::uint64_t version);
+  // One op on the calling thread.
+  void applySerial(const MergeOp& op);
+  // ops[begin, end) with the lent threads, in two phases: the tasks evaluate the ops (op k by task
+  // k % tasks) into per-shard-owner lists, then task t applies, op by op in order, the lists of the
+  // shards s with s % tasks == t. `scratch` keeps the lists' memory between calls.
+  void applyParallel(const std::vector<MergeOp>& ops, std::size_t begin, std::size_t end, const MergeThreads& threads,
+                     std::vector<std::vector<Contribution>>& scratch);
+  // Ops per parallel call: enough to keep every task busy, few enough to bound the lists' memory (a
+  // submap contributes about 1 MB) and the wait for a cancellation.
+  static constexpr std::size_t kParallelGroup = 16;
+  // sync() when it merges everything from scratch; `entries` checked.
+  Result<SyncStats> rebuild(const std::vector<SubmapEntry>& entries, SyncStats stats,
+                            const std::function<bool()>& cancelled, const MergeThreads& threads);
 
   GridConfig config_;
   LogOddsBounds bounds_;
   double inv_resolution_;
-  BlockTable<Block> blocks_;
-  std::unordered_map<std::uint64_t, std::uint64_t> removed_;  // packed block -> version it was erased at
-  std::map<SubmapId, SubmapEntry> merged_;                    // each submap at the pose it was merged at
+  std::array<Shard, kShards> shards_;
+  std::map<SubmapId, SubmapEntry> merged_;  // each submap at the pose it was merged at
   std::uint64_t version_ = 0;
   std::uint64_t writer_id_ = 0;
   std::uint64_t generation_ = 0;  // snapshots taken so far (see snapshot())
@@ -170,15 +241,17 @@ class MergedMap {
 
 template <class F>
 void MergedMap::forEachKnown(F&& f) const {
-  blocks_.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
-    const VoxelKey base = unpackBlock(packed) * kBlockSide;
-    for (int i = 0; i < kBlockVoxels; ++i) {
-      if (block->count(static_cast<std::size_t>(i)) == 0) continue;
-      const VoxelKey key =
-          base + VoxelKey(i & (kBlockSide - 1), (i >> kBlockBits) & (kBlockSide - 1), i >> (2 * kBlockBits));
-      f(key, valueOf(*block, i));
-    }
-  });
+  for (const Shard& shard : shards_) {
+    shard.blocks.forEach([&](std::uint64_t packed, const std::shared_ptr<Block>& block) {
+      const VoxelKey base = unpackBlock(packed) * kBlockSide;
+      for (int i = 0; i < kBlockVoxels; ++i) {
+        if (block->count(static_cast<std::size_t>(i)) == 0) continue;
+        const VoxelKey key =
+            base + VoxelKey(i & (kBlockSide - 1), (i >> kBlockBits) & (kBlockSide - 1), i >> (2 * kBlockBits));
+        f(key, valueOf(*block, i));
+      }
+    });
+  }
 }
 
 template <class Visit>

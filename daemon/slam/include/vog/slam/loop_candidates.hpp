@@ -42,6 +42,14 @@ bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b);
 Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(const std::vector<SubmapFootprint>& submaps,
                                                                             const CandidateConfig& config = {});
 
+// The candidates that involve submaps[newest]: every position k != newest such that the pair
+// (min(k, newest), max(k, newest)) is in findLoopCandidates(submaps, config), in ascending k, which is
+// the order findLoopCandidates lists those pairs in. The same gate tests on the same values, so the same
+// set: O(N) tests for the newest submap instead of O(N^2) over all pairs. The same errors (every
+// footprint is checked), and an error when `newest` is out of range.
+Result<std::vector<std::size_t>> findLoopCandidatesOf(const std::vector<SubmapFootprint>& submaps, std::size_t newest,
+                                                      const CandidateConfig& config = {});
+
 // Squared Mahalanobis distance of the (x, y, yaw) difference between a registration and the odometry
 // prediction (yaw wrapped) under the relative-pose covariance (3x3, x, y, yaw); errors when the
 // covariance is not positive definite. Gate with a chi-square quantile, e.g. 7.81 (3 DOF, 95 %).

@@ -76,6 +76,11 @@ struct LoopSubmap {
   std::int64_t first_stamp_ns = 0;
 };
 
+// The candidate gate's view of a submap: its grid's known box, cloud centroid and cloud size (fixed once
+// the grid is finalized) at its current base-pose estimate. The centroid costs a pass over the cloud: a
+// caller that closes loops for every new submap computes it once per submap and keeps it.
+SubmapFootprint footprintOf(const LoopSubmap& submap);
+
 // An accepted closure: `to` registered against `from` (T_from_to), and the factor it becomes.
 struct LoopClosure {
   std::int64_t from = 0;  // the older submap (ICP target)
@@ -105,7 +110,13 @@ class LoopCloser {
   static Result<LoopCloser> create(const LoopCloserConfig& config);
   // Closures between `submaps[newest]` and every other candidate submap. Errors on an index out of
   // range or a submap without a finalized grid; a failed or rejected registration is a statistic.
+  // The candidates are found by findLoopCandidatesOf (O(N) gate tests) and tried in ascending position.
   Result<LoopCloseOutcome> closeLoops(const std::vector<LoopSubmap>& submaps, std::size_t newest) const;
+  // The same with the footprints given (footprints[k] equal to footprintOf(submaps[k])), so that a caller
+  // does not recompute every submap's centroid for every new submap; an error when the sizes or the
+  // indices differ.
+  Result<LoopCloseOutcome> closeLoops(const std::vector<LoopSubmap>& submaps,
+                                      const std::vector<SubmapFootprint>& footprints, std::size_t newest) const;
   const LoopCloserConfig& config() const { return config_; }
 
  private:

@@ -75,6 +75,7 @@ Eigen::Vector3d planarOdometry(const geometry::Pose3& T_world_a, const geometry:
 struct OptimizeResult {
   bool converged = false;
   int iterations = 0;
+  int free_nodes = 0;         // nodes the solve could move (optimizeFrom: from its first node on)
   double initial_cost = 0.0;  // Ceres cost: 0.5 * sum of robustified squared whitened residuals
   double final_cost = 0.0;
   double solve_ms = 0.0;
@@ -127,6 +128,15 @@ class PoseGraph {
   Status initializeChordal();
 
   Result<OptimizeResult> optimize();
+  // Optimises only the nodes with id >= first_free: the others are held at their estimates and the
+  // factors between held nodes are left out, so the cost follows the part of the graph that is free,
+  // not the whole graph. The held nodes' estimates stay bit for bit. Where a loop closure joins the
+  // newest node to an older one, freeing the nodes from the older one on gives the whole graph's
+  // optimum when nothing else links the free part to the held one (a chain with one loop), and
+  // otherwise the optimum with the held part as it was estimated. When no factor joins the free part
+  // to a held node, its first node is anchored as the first node is in optimize(). Errors as
+  // optimize(), and when no node is free.
+  Result<OptimizeResult> optimizeFrom(NodeId first_free);
 
   bool hasNode(NodeId id) const { return nodes_.count(id) != 0; }
   Result<geometry::Pose3> pose(NodeId id) const;
@@ -145,6 +155,8 @@ class PoseGraph {
  private:
   explicit PoseGraph(const PoseGraphConfig& config) : config_(config) {}
   Status checkNodes(NodeId from, NodeId to, const char* what) const;
+  // optimize() over the nodes with id >= first_free (every node: the lowest id or below).
+  Result<OptimizeResult> solve(NodeId first_free);
 
   enum class RelativeKind { kOdometry, kLoopClosure, kPartialLoopClosure, kSe2, kSe3 };
   // A relative factor. Odometry and closures: residual = sqrt_information * P * (h(from, to) -
