@@ -298,6 +298,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       "--lc-max-heading-deg",
       [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
       "loop closures: viewing-direction gate, deg");
+  app.add_option("--graph-function-tolerance", mc.graph.function_tolerance,
+                 "mapping: the pose graph solver's relative cost change that ends it");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
   app.add_flag("--same-run-global-tree", same_run_global_tree,
@@ -449,7 +451,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   double evaluation_s = 0.0;                 // spent inside the mission loop on the evaluation (not the mission's time)
   // For the --series rows: feed() time per closed submap, and every optimisation's solve time.
   // feed() runs on this thread: its CPU time too (the wall time includes waiting for a shared core).
-  std::vector<double> mapping_ms_per_submap, mapping_cpu_ms_per_submap, optimize_ms_all;
+  std::vector<double> mapping_ms_per_submap, mapping_cpu_ms_per_submap, optimize_ms_all, optimize_iterations_all;
   double mapping_s_open = 0.0, mapping_cpu_s_open = 0.0;  // feed() time since the last closed submap
   bool series_row_due = false;                            // a multiple of --report-every submaps was just closed
   ScanQueue queue;
@@ -523,7 +525,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         mapping_error = u.error();
         return;
       }
-      if (u->optimized) optimize_ms_all.push_back(u->optimize.solve_ms);
+      if (u->optimized) {
+        optimize_ms_all.push_back(u->optimize.solve_ms);
+        optimize_iterations_all.push_back(u->optimize.iterations);
+      }
       if (u->closed_submap) {
         if (auto it = open_truth.find(u->closed->first_stamp_ns); it != open_truth.end())
           base_truth.emplace(*u->closed_submap, it->second);
@@ -621,6 +626,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     };
     const std::vector<double> mapping_ms = since(mapping_ms_per_submap, mark.mapping);
     const std::vector<double> optimize_ms = since(optimize_ms_all, mark.optimize);
+    const std::vector<double> optimize_iterations = since(optimize_iterations_all, mark.optimize);
     const std::vector<double> mapping_cpu_ms = since(mapping_cpu_ms_per_submap, mark.mapping);
     const std::vector<double> plan_ms = since(plan_ms_all, mark.plans);
     const std::vector<double> plan_cpu_ms = since(plan_cpu_ms_all, mark.plans);
@@ -642,6 +648,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     row.add("optimizations", static_cast<std::int64_t>(optimize_ms.size()));
     row.add("optimize_ms_median", vog::bench::median(optimize_ms));
     row.add("optimize_ms_max", vog::bench::percentile(optimize_ms, 1.0));
+    row.add("optimize_iterations_median", vog::bench::median(optimize_iterations));
     row.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
     row.add("merges", static_cast<std::int64_t>(merge_ms.size()));
     row.add("merge_ms_p95", vog::bench::percentile(merge_ms, 0.95));
