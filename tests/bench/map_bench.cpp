@@ -16,6 +16,7 @@
 #include <functional>
 #include <filesystem>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <thread>
 
@@ -41,6 +42,15 @@ double threadCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// A map operation the figures rely on: a failure ends the bench with its message (no figure of a
+// merge that did not happen).
+template <class R>
+void orExit(const R& result) {
+  if (result.ok()) return;
+  std::fprintf(stderr, "vog-bench map: %s\n", result.error().message.c_str());
+  std::exit(1);
 }
 
 template <class F>
@@ -73,7 +83,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
   std::fprintf(stderr, "built %d submaps in %.1f s\n", opt.submaps, build_s);
 
   auto vog = map::VogMap::create(config).value();
-  for (const auto& e : entries) (void)vog->addSubmap(e.id, e.grid, e.T_world_submap);
+  for (const auto& e : entries) orExit(vog->addSubmap(e.id, e.grid, e.T_world_submap));
   std::size_t leaves = 0;
   for (const auto& e : entries) leaves += e.grid->leafCount();
 
@@ -88,7 +98,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
     const bench::Stopwatch sw;
     for (const auto& e : entries) {
       const bench::Stopwatch one;
-      (void)merged->add(e);
+      orExit(merged->add(e));
       if (rep == 0) add_ms.push_back(one.seconds() * 1e3);
     }
     scratch_s.push_back(sw.seconds());
@@ -104,7 +114,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
     auto parallel = map::MergedMap::create(config).value();
     const bench::Stopwatch sw;
     const std::clock_t cpu0 = std::clock();
-    (void)parallel->sync(entries, map::MergeConfig{}, {}, threads);
+    orExit(parallel->sync(entries, map::MergeConfig{}, {}, threads));
     scratch_parallel_cpu_s.push_back(static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC);
     scratch_parallel_s.push_back(sw.seconds());
     parallel_identical = parallel_identical && parallel->sameVoxels(*merged);
@@ -131,7 +141,7 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
       ideal_s += longest_s;
     };
     auto parallel = map::MergedMap::create(config).value();
-    (void)parallel->sync(entries, map::MergeConfig{}, {}, timed);
+    orExit(parallel->sync(entries, map::MergeConfig{}, {}, timed));
     parallel_identical = parallel_identical && parallel->sameVoxels(*merged);
   }
 
@@ -142,23 +152,23 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
     std::vector<geometry::Pose3> moved_poses = vog->poses();
     const auto moveAll = [&](double dx) {
       for (auto& T : moved_poses) T = geometry::poseFromXyzRpy(dx, 0.5 * dx, 0.0, 0.0, 0.0, 0.5 * dx) * T;
-      (void)vog->deform(moved_poses);
+      orExit(vog->deform(moved_poses));
       return vog->entries();
     };
     for (int rep = 0; rep < 2; ++rep) {
       const auto current = moveAll(0.02);
       const bench::Stopwatch sw;
-      (void)merged->sync(current, map::MergeConfig{});
+      orExit(merged->sync(current, map::MergeConfig{}));
       remerge_all_ms.push_back(sw.seconds() * 1e3);
     }
     auto reference = map::MergedMap::create(config).value();
     for (int rep = 0; rep < 2; ++rep) {
       const auto current = moveAll(-0.02);
       const bench::Stopwatch sw;
-      (void)merged->sync(current, map::MergeConfig{}, {}, threads);
+      orExit(merged->sync(current, map::MergeConfig{}, {}, threads));
       remerge_all_parallel_ms.push_back(sw.seconds() * 1e3);
       if (rep == 1) {
-        for (const auto& e : current) (void)reference->add(e);
+        for (const auto& e : current) orExit(reference->add(e));
         parallel_identical = parallel_identical && reference->sameVoxels(*merged);
       }
     }
@@ -176,10 +186,10 @@ VOG_BENCH_COMMAND(map, "VOG-Map: build, merge from scratch, incremental add, par
       auto& T = poses[pick(rng)];
       T = geometry::poseFromXyzRpy(u(rng), u(rng), 0.2 * u(rng), 0.0, 0.0, 0.2 * u(rng)) * T;
     }
-    (void)vog->deform(poses);
+    orExit(vog->deform(poses));
     const auto current = vog->entries();
     const bench::Stopwatch sw;
-    (void)merged->sync(current, map::MergeConfig{});
+    orExit(merged->sync(current, map::MergeConfig{}));
     remerge_ms.push_back(sw.seconds() * 1e3);
     const bench::Stopwatch snap;
     const auto s = merged->snapshot();

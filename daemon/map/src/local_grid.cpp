@@ -190,25 +190,36 @@ std::optional<float> LocalGrid::logOdds(const Eigen::Vector3d& p_grid) const {
   return logOddsAt(pointToKey(p_grid, inv_resolution_));
 }
 
-std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
-  std::vector<Leaf> out;
-  if (finalized_) {
-    out.reserve(leaves_.size());
-    forEachLeaf([&](const Leaf& leaf) { out.push_back(leaf); });
-    return out;
-  }
-  const unsigned max_depth = tree_->getTreeDepth();
-  for (auto it = tree_->begin_leafs(), end = tree_->end_leafs(); it != end; ++it) {
+namespace {
+
+// Calls f(leaf) for every leaf of an OctoMap tree, in its depth-first order.
+template <class F>
+void forEachTreeLeaf(const octomap::OcTree& tree, F&& f) {
+  const unsigned max_depth = tree.getTreeDepth();
+  LocalGrid::Leaf leaf;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     // A leaf at depth d covers 2^(16-d) voxels per axis; its key is the voxel just above its centre.
     const int span = 1 << (max_depth - it.getDepth());
     const octomap::OcTreeKey& k = it.getKey();
-    Leaf leaf;
     for (int i = 0; i < 3; ++i) {
       leaf.min[i] = static_cast<int>(k[static_cast<unsigned>(i)]) - kOctoOffset - span / 2;
       leaf.max[i] = leaf.min[i] + span - 1;
     }
     leaf.log_odds = it->getLogOdds();
-    out.push_back(leaf);
+    f(leaf);
+  }
+}
+
+}  // namespace
+
+std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
+  std::vector<Leaf> out;
+  const auto keep = [&](const Leaf& leaf) { out.push_back(leaf); };
+  if (finalized_) {
+    out.reserve(leaves_.size());
+    forEachLeaf(keep);
+  } else {
+    forEachTreeLeaf(*tree_, keep);
   }
   return out;
 }
@@ -216,10 +227,10 @@ std::vector<LocalGrid::Leaf> LocalGrid::leaves() const {
 void LocalGrid::packLeaves() {
   std::vector<PackedLeaves::Leaf> packed;
   packed.reserve(tree_->getNumLeafNodes());
-  for (const Leaf& leaf : leaves()) {
+  forEachTreeLeaf(*tree_, [&](const Leaf& leaf) {
     const int span_log2 = std::countr_zero(static_cast<unsigned>(leaf.max.x() - leaf.min.x() + 1));
     packed.push_back({leaf.min, span_log2, leaf.log_odds});
-  }
+  });
   leaves_ = PackedLeaves::pack(std::move(packed));
 }
 
