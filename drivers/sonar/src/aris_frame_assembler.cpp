@@ -3,6 +3,8 @@
 #include "vog/sonar/aris_frame_stream.pb.h"
 #include "vog/sonar/aris_reorder.hpp"
 
+#include <google/protobuf/message_lite.h>
+
 #include <algorithm>
 #include <cassert>
 #include <climits>
@@ -24,6 +26,17 @@ constexpr std::array<std::string_view, kArisPartRefusalCount> kRefusalNames = {
 
 std::string frameName(std::int32_t frame_index) { return "ARIS frame " + std::to_string(frame_index); }
 
+std::vector<std::uint8_t> serialized(const google::protobuf::MessageLite& msg) {
+  std::vector<std::uint8_t> out(msg.ByteSizeLong());
+  msg.SerializeToArray(out.data(), static_cast<int>(out.size()));
+  return out;
+}
+
+bool parsed(google::protobuf::MessageLite& msg, std::span<const std::uint8_t> bytes) {
+  return bytes.size() <= static_cast<std::size_t>(INT_MAX) &&
+         msg.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
+}
+
 }  // namespace
 
 std::string_view arisPartRefusalName(ArisPartRefusal reason) { return kRefusalNames[static_cast<std::size_t>(reason)]; }
@@ -40,24 +53,19 @@ std::vector<std::uint8_t> encodeArisFramePart(const ArisFramePartFields& part) {
   msg.set_data(part.data.data(), part.data.size());
   msg.set_data_offset(part.data_offset);
   msg.set_ack_port(part.ack_port);
-  std::vector<std::uint8_t> out(msg.ByteSizeLong());
-  msg.SerializeToArray(out.data(), static_cast<int>(out.size()));
-  return out;
+  return serialized(msg);
 }
 
 std::vector<std::uint8_t> encodeArisFramePartAck(const ArisFramePartAck& ack) {
   frame_stream::FramePartAck msg;
   msg.set_frame_index(ack.frame_index);
   msg.set_data_offset(ack.data_offset);
-  std::vector<std::uint8_t> out(msg.ByteSizeLong());
-  msg.SerializeToArray(out.data(), static_cast<int>(out.size()));
-  return out;
+  return serialized(msg);
 }
 
 Result<ArisFramePartAck> decodeArisFramePartAck(std::span<const std::uint8_t> datagram) {
   frame_stream::FramePartAck msg;
-  if (datagram.size() > static_cast<std::size_t>(INT_MAX) ||
-      !msg.ParseFromArray(datagram.data(), static_cast<int>(datagram.size()))) {
+  if (!parsed(msg, datagram)) {
     return Error{"ARIS FramePartAck: " + std::to_string(datagram.size()) + " bytes do not decode"};
   }
   if (!msg.has_frame_index() || !msg.has_data_offset()) {
@@ -128,8 +136,7 @@ ArisLiveFrame ArisFrameAssembler::finish(Partial& p) {
 ArisPartResult ArisFrameAssembler::add(std::span<const std::uint8_t> datagram, double now_s) {
   ++stats_.datagrams;
   frame_stream::FramePart part;
-  if (datagram.size() > static_cast<std::size_t>(INT_MAX) ||
-      !part.ParseFromArray(datagram.data(), static_cast<int>(datagram.size()))) {
+  if (!parsed(part, datagram)) {
     return refuse(ArisPartRefusal::kUndecodable,
                   "datagram of " + std::to_string(datagram.size()) + " bytes is not a FramePart");
   }

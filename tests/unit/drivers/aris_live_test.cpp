@@ -93,6 +93,25 @@ TEST(ArisReorder, UnknownPingModeOrWrongSizeIsAnErrorNamingTheValue) {
   EXPECT_TRUE(contains(wrong_samples.error().message, "11 samples")) << wrong_samples.error().message;
 }
 
+// ../shared/data/aris/sample.aris was written by ARIScope: its frames say ReorderedSamples = 1
+// (offset 516) and carry no settings cookie (AppliedSettings, offset 680, = 0).
+TEST(ArisHeader, RealSampleFramesAreMarkedReordered) {
+  const auto bytes = loadFile(test::sharedDataDir() / "aris" / "sample.aris");
+  ASSERT_TRUE(bytes.ok()) << bytes.error().message;
+  const auto rec = decodeArisFile(*bytes);
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  ASSERT_EQ(rec->aris_meta.size(), 6u);
+  for (const auto& meta : rec->aris_meta) {
+    EXPECT_TRUE(meta.reordered_samples);
+    EXPECT_EQ(meta.settings_cookie, 0u);
+    EXPECT_EQ(meta.samples_per_beam, 2000u);
+  }
+  // A header shorter than the fields read is an error that says how short.
+  const auto short_header = decodeArisFrameHeader(std::span(*bytes).subspan(1024, kArisFrameHeaderUsedBytes - 1));
+  ASSERT_FALSE(short_header.ok());
+  EXPECT_TRUE(contains(short_header.error().message, "683 bytes")) << short_header.error().message;
+}
+
 // ---- Wire format (field numbers of PROTOCOLS.md) ----
 
 TEST(ArisProto, FieldNumbersOnTheWire) {

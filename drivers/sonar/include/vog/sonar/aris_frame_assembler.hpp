@@ -65,6 +65,7 @@ enum class ArisPartRefusal : std::uint8_t {
   kTooManyFramesInFlight,  // a part of a new frame while max_frames_in_flight frames are incomplete
 };
 inline constexpr std::size_t kArisPartRefusalCount = 10;
+static_assert(static_cast<std::size_t>(ArisPartRefusal::kTooManyFramesInFlight) + 1 == kArisPartRefusalCount);
 std::string_view arisPartRefusalName(ArisPartRefusal reason);
 
 struct ArisFrameAssemblerConfig {
