@@ -30,6 +30,9 @@ constexpr std::size_t kSamplePeriod = 452;
 constexpr std::size_t kSoundSpeed = 464;
 constexpr std::size_t kSamplesPerBeam = 468;
 constexpr std::size_t kSampleStartDelay = 476;
+constexpr std::size_t kReorderedSamples = 516;
+constexpr std::size_t kAppliedSettings = 680;
+static_assert(kAppliedSettings + 4 == kArisFrameHeaderUsedBytes);
 // File header (FileHeader.fields.csv).
 constexpr std::size_t kFileFrameCount = 4;
 constexpr std::size_t kFileNumRawBeams = 16;
@@ -42,9 +45,9 @@ constexpr std::array<double, 4> kDidsonWindowLength_m = {1.125, 2.25, 4.5, 9.0};
 constexpr double kDidsonStartStep_m = 0.375;
 constexpr int kDidsonSamples = 512;
 
-Result<std::int64_t> usToNs(std::uint64_t us, std::size_t frame) {
+Result<std::int64_t> usToNs(std::uint64_t us) {
   if (us > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max() / 1000)) {
-    return Error{"frame " + std::to_string(frame) + ": frame time " + std::to_string(us) + " us out of range"};
+    return Error{"frame time " + std::to_string(us) + " us out of range"};
   }
   return static_cast<std::int64_t>(us) * 1000;
 }
@@ -57,6 +60,52 @@ Result<int> arisBeamsForPingMode(std::uint32_t ping_mode) {
   if (ping_mode >= 6 && ping_mode <= 8) return 64;
   if (ping_mode >= 9 && ping_mode <= 12) return 128;
   return Error{"ARIS PingMode " + std::to_string(ping_mode) + " unknown (1..12)"};
+}
+
+Result<ArisFrameMeta> decodeArisFrameHeader(std::span<const std::uint8_t> h) {
+  if (h.size() < kArisFrameHeaderUsedBytes) {
+    return Error{"ARIS frame header of " + std::to_string(h.size()) + " bytes is shorter than the " +
+                 std::to_string(kArisFrameHeaderUsedBytes) + " bytes that hold its fields up to AppliedSettings"};
+  }
+  ArisFrameMeta meta;
+  meta.frame_index = readU32LE(h, aris::kFrameIndex);
+  meta.frame_time_us = readU64LE(h, aris::kFrameTime);
+  meta.ping_mode = readU32LE(h, aris::kPingMode);
+  meta.sample_period_us = readU32LE(h, aris::kSamplePeriod);
+  meta.sample_start_delay_us = readU32LE(h, aris::kSampleStartDelay);
+  meta.header_window_start_m = readF32LE(h, aris::kWindowStart);
+  meta.header_window_length_m = readF32LE(h, aris::kWindowLength);
+  meta.samples_per_beam = readU32LE(h, aris::kSamplesPerBeam);
+  meta.sound_speed_mps = readF32LE(h, aris::kSoundSpeed);
+  meta.reordered_samples = readU32LE(h, aris::kReorderedSamples) != 0;
+  meta.settings_cookie = readU32LE(h, aris::kAppliedSettings);
+  return meta;
+}
+
+Result<SonarFrame> arisFrameFromMeta(const ArisFrameMeta& meta, std::uint32_t samples, const SonarFileLimits& limits) {
+  const auto beams = arisBeamsForPingMode(meta.ping_mode);
+  if (!beams.ok()) return beams.error();
+  if (*beams > limits.max_beams || samples == 0 || samples > static_cast<std::uint32_t>(limits.max_samples)) {
+    return Error{std::to_string(*beams) + " beams x " + std::to_string(samples) + " samples outside limits"};
+  }
+  const float c = meta.sound_speed_mps;
+  if (!std::isfinite(c) || c < 1000.0f || c > 2000.0f) {
+    return Error{"sound speed " + std::to_string(c) + " m/s outside [1000, 2000]"};
+  }
+  if (meta.sample_period_us == 0) return Error{"SamplePeriod is 0"};
+  const auto stamp = usToNs(meta.frame_time_us);
+  if (!stamp.ok()) return stamp.error();
+  SonarFrame f;
+  f.stamp_ns = *stamp;
+  f.frame_index = meta.frame_index;
+  f.n_beams = *beams;
+  f.n_samples = static_cast<int>(samples);
+  f.sound_speed_mps = static_cast<double>(c);
+  // Range of a sample (ARIS File SDK): the echo travels out and back at c.
+  const double half_c = f.sound_speed_mps / 2.0;
+  f.window_start_m = meta.sample_start_delay_us * 1e-6 * half_c;
+  f.window_length_m = meta.sample_period_us * 1e-6 * half_c * samples;
+  return f;
 }
 
 Result<SonarRecording> decodeArisFile(std::span<const std::uint8_t> b, const SonarFileLimits& limits) {
@@ -79,44 +128,17 @@ Result<SonarRecording> decodeArisFile(std::span<const std::uint8_t> b, const Son
       return Error{"ARIS file has more than " + std::to_string(limits.max_frames) + " frames"};
     const auto h = b.subspan(pos, kArisFrameHeaderBytes);
     if (readU32LE(h, aris::kVersion) != kArisSignature) return Error{where + ": frame header version is not DDF v5"};
-    ArisFrameMeta meta;
-    meta.frame_index = readU32LE(h, aris::kFrameIndex);
-    meta.frame_time_us = readU64LE(h, aris::kFrameTime);
-    meta.ping_mode = readU32LE(h, aris::kPingMode);
-    meta.sample_period_us = readU32LE(h, aris::kSamplePeriod);
-    meta.sample_start_delay_us = readU32LE(h, aris::kSampleStartDelay);
-    meta.header_window_start_m = readF32LE(h, aris::kWindowStart);
-    meta.header_window_length_m = readF32LE(h, aris::kWindowLength);
-    const auto beams = arisBeamsForPingMode(meta.ping_mode);
-    if (!beams.ok()) return Error{where + ": " + beams.error().message};
-    std::uint32_t samples = readU32LE(h, aris::kSamplesPerBeam);
+    const ArisFrameMeta meta = *decodeArisFrameHeader(h);  // 1024 bytes hold every field
+    std::uint32_t samples = meta.samples_per_beam;
     if (samples == 0) samples = readU32LE(b, aris::kFileSamplesPerChannel);
-    if (*beams > limits.max_beams || samples == 0 || samples > static_cast<std::uint32_t>(limits.max_samples)) {
-      return Error{where + ": " + std::to_string(*beams) + " beams x " + std::to_string(samples) +
-                   " samples outside limits"};
-    }
-    const float c = readF32LE(h, aris::kSoundSpeed);
-    if (!std::isfinite(c) || c < 1000.0f || c > 2000.0f) {
-      return Error{where + ": sound speed " + std::to_string(c) + " m/s outside [1000, 2000]"};
-    }
-    if (meta.sample_period_us == 0) return Error{where + ": SamplePeriod is 0"};
-    const std::size_t data_bytes = static_cast<std::size_t>(*beams) * samples;
+    auto frame = arisFrameFromMeta(meta, samples, limits);
+    if (!frame.ok()) return Error{where + ": " + frame.error().message};
+    SonarFrame& f = *frame;
+    const std::size_t data_bytes = static_cast<std::size_t>(f.n_beams) * samples;
     if (b.size() - pos - kArisFrameHeaderBytes < data_bytes) {
       rec.truncated_bytes = b.size() - pos;
       break;
     }
-    const auto stamp = usToNs(meta.frame_time_us, k);
-    if (!stamp.ok()) return stamp.error();
-    SonarFrame f;
-    f.stamp_ns = *stamp;
-    f.frame_index = meta.frame_index;
-    f.n_beams = *beams;
-    f.n_samples = static_cast<int>(samples);
-    f.sound_speed_mps = static_cast<double>(c);
-    // Range of a sample (ARIS File SDK): the echo travels out and back at c.
-    const double half_c = f.sound_speed_mps / 2.0;
-    f.window_start_m = meta.sample_start_delay_us * 1e-6 * half_c;
-    f.window_length_m = meta.sample_period_us * 1e-6 * half_c * samples;
     const auto data = b.subspan(pos + kArisFrameHeaderBytes, data_bytes);
     f.samples.assign(data.begin(), data.end());
     rec.frames.push_back(std::move(f));
@@ -124,6 +146,46 @@ Result<SonarRecording> decodeArisFile(std::span<const std::uint8_t> b, const Son
     pos += kArisFrameHeaderBytes + data_bytes;
   }
   return rec;
+}
+
+Result<std::vector<std::uint8_t>> encodeArisFrameHeader(const SonarFrame& f, const ArisHeaderOptions& options) {
+  const auto beams = arisBeamsForPingMode(options.ping_mode);
+  if (!beams.ok()) return beams.error();
+  if (f.n_beams != *beams) {
+    return Error{"PingMode " + std::to_string(options.ping_mode) + " has " + std::to_string(*beams) +
+                 " beams, the frame " + std::to_string(f.n_beams)};
+  }
+  if (f.n_samples <= 0 ||
+      f.samples.size() != static_cast<std::size_t>(f.n_beams) * static_cast<std::size_t>(f.n_samples)) {
+    return Error{"samples size " + std::to_string(f.samples.size()) + " does not match " + std::to_string(f.n_beams) +
+                 " beams x " + std::to_string(f.n_samples) + " samples"};
+  }
+  if (!(f.sound_speed_mps >= 1000.0 && f.sound_speed_mps <= 2000.0)) {
+    return Error{"sound speed " + std::to_string(f.sound_speed_mps) + " m/s outside [1000, 2000]"};
+  }
+  if (f.stamp_ns < 0) return Error{"negative stamp_ns " + std::to_string(f.stamp_ns)};
+  const double half_c = f.sound_speed_mps / 2.0;
+  const double delay_us = std::round(f.window_start_m / half_c * 1e6);
+  const double period_us = std::round(f.sampleLength_m() / half_c * 1e6);
+  if (!(delay_us >= 0.0 && delay_us < 4e9) || !(period_us >= 1.0 && period_us < 4e9)) {
+    return Error{"window start " + std::to_string(f.window_start_m) + " m / length " +
+                 std::to_string(f.window_length_m) + " m not representable in whole microseconds"};
+  }
+  std::vector<std::uint8_t> h(kArisFrameHeaderBytes, 0);
+  writeU32LE(h, aris::kFrameIndex, f.frame_index);
+  writeU64LE(h, aris::kFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
+  writeU32LE(h, aris::kVersion, kArisSignature);
+  writeF32LE(h, aris::kWindowStart, static_cast<float>(f.window_start_m));
+  writeF32LE(h, aris::kWindowLength, static_cast<float>(f.window_length_m));
+  writeF32LE(h, aris::kSampleRate, static_cast<float>(1e6 / period_us));
+  writeU32LE(h, aris::kPingMode, options.ping_mode);
+  writeU32LE(h, aris::kSamplePeriod, static_cast<std::uint32_t>(period_us));
+  writeF32LE(h, aris::kSoundSpeed, static_cast<float>(f.sound_speed_mps));
+  writeU32LE(h, aris::kSamplesPerBeam, static_cast<std::uint32_t>(f.n_samples));
+  writeU32LE(h, aris::kSampleStartDelay, static_cast<std::uint32_t>(delay_us));
+  writeU32LE(h, aris::kReorderedSamples, options.reordered_samples ? 1U : 0U);
+  writeU32LE(h, aris::kAppliedSettings, options.settings_cookie);
+  return h;
 }
 
 Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> frames) {
@@ -151,34 +213,10 @@ Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> fra
     const SonarFrame& f = frames[k];
     const std::string where = "ARIS frame " + std::to_string(k);
     if (f.n_beams != beams || f.n_samples != samples) return Error{where + ": geometry differs from frame 0"};
-    if (f.n_samples <= 0 ||
-        f.samples.size() != static_cast<std::size_t>(f.n_beams) * static_cast<std::size_t>(f.n_samples)) {
-      return Error{where + ": samples size does not match beams x samples"};
-    }
-    if (!(f.sound_speed_mps >= 1000.0 && f.sound_speed_mps <= 2000.0)) {
-      return Error{where + ": sound speed " + std::to_string(f.sound_speed_mps) + " m/s outside [1000, 2000]"};
-    }
-    if (f.stamp_ns < 0) return Error{where + ": negative stamp_ns"};
-    const double half_c = f.sound_speed_mps / 2.0;
-    const double delay_us = std::round(f.window_start_m / half_c * 1e6);
-    const double period_us = std::round(f.sampleLength_m() / half_c * 1e6);
-    if (!(delay_us >= 0.0 && delay_us < 4e9) || !(period_us >= 1.0 && period_us < 4e9)) {
-      return Error{where + ": window start " + std::to_string(f.window_start_m) + " m / length " +
-                   std::to_string(f.window_length_m) + " m not representable in whole microseconds"};
-    }
-    std::array<std::uint8_t, kArisFrameHeaderBytes> h{};
-    writeU32LE(h, aris::kFrameIndex, f.frame_index);
-    writeU64LE(h, aris::kFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
-    writeU32LE(h, aris::kVersion, kArisSignature);
-    writeF32LE(h, aris::kWindowStart, static_cast<float>(f.window_start_m));
-    writeF32LE(h, aris::kWindowLength, static_cast<float>(f.window_length_m));
-    writeF32LE(h, aris::kSampleRate, static_cast<float>(1e6 / period_us));
-    writeU32LE(h, aris::kPingMode, ping_mode_for_beams);
-    writeU32LE(h, aris::kSamplePeriod, static_cast<std::uint32_t>(period_us));
-    writeF32LE(h, aris::kSoundSpeed, static_cast<float>(f.sound_speed_mps));
-    writeU32LE(h, aris::kSamplesPerBeam, static_cast<std::uint32_t>(f.n_samples));
-    writeU32LE(h, aris::kSampleStartDelay, static_cast<std::uint32_t>(delay_us));
-    out.insert(out.end(), h.begin(), h.end());
+    // SonarFrame samples are in beam/sample order: the file's frames are reordered.
+    const auto h = encodeArisFrameHeader(f, {.ping_mode = ping_mode_for_beams, .reordered_samples = true});
+    if (!h.ok()) return Error{where + ": " + h.error().message};
+    out.insert(out.end(), h->begin(), h->end());
     out.insert(out.end(), f.samples.begin(), f.samples.end());
   }
   return out;
@@ -245,8 +283,8 @@ Result<SonarRecording> decodeDdfFile(std::span<const std::uint8_t> b, const Sona
     if (!std::isfinite(c) || (c != 0.0f && (c < 1000.0f || c > 2000.0f))) {
       return Error{where + ": sound speed " + std::to_string(c) + " m/s outside [1000, 2000]"};
     }
-    const auto stamp = usToNs(readU64LE(h, kDdfFrameTime), k);
-    if (!stamp.ok()) return stamp.error();
+    const auto stamp = usToNs(readU64LE(h, kDdfFrameTime));
+    if (!stamp.ok()) return Error{where + ": " + stamp.error().message};
     SonarFrame f;
     f.stamp_ns = *stamp;
     f.frame_index = readU32LE(h, kDdfFrameIndex);

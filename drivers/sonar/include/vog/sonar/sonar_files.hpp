@@ -10,7 +10,10 @@
 //   frame header: 0 FrameIndex, 4 FrameTime (u64 us since the Unix epoch), 12 Version,
 //                 52 WindowStart (f32, as set), 56 WindowLength (f32, as set), 436 PingMode,
 //                 452 SamplePeriod (u32 us), 464 SoundSpeed (f32 m/s), 468 SamplesPerBeam,
-//                 476 SampleStartDelay (u32 us)
+//                 476 SampleStartDelay (u32 us), 516 ReorderedSamples (u32, 0 = sonar order),
+//                 680 AppliedSettings (u32, the cookie of the acoustic settings the frame was made
+//                 with: "cookie indices for command acknowledge", FrameHeader.fields.csv)
+// The live frame stream (aris_frame_assembler.hpp) sends the same header, unpadded.
 // The window actually sampled is start = SampleStartDelay * 1e-6 * c / 2 and sample length =
 // SamplePeriod * 1e-6 * c / 2 (ARIS File SDK, "range of a sample"), which is what SonarFrame holds.
 //
@@ -40,7 +43,19 @@ struct ArisFrameMeta {
   std::uint32_t sample_period_us = 0;
   float header_window_start_m = 0.0f;   // WindowStart field as written by the recorder
   float header_window_length_m = 0.0f;  // WindowLength field as written by the recorder
+  std::uint32_t samples_per_beam = 0;   // SamplesPerBeam (0 in some files: SamplesPerChannel applies)
+  float sound_speed_mps = 0.0f;         // SoundSpeed
+  bool reordered_samples = false;       // ReorderedSamples: data already in beam/sample order
+  std::uint32_t settings_cookie = 0;    // AppliedSettings: cookie of SetAcousticSettings in effect
 };
+
+// Bytes of an ARIS frame header that hold every field ArisFrameMeta reads (up to AppliedSettings);
+// a file's header is 1024 bytes, the live stream's may be shorter.
+inline constexpr std::size_t kArisFrameHeaderUsedBytes = 684;
+
+// Reads the ArisFrameMeta fields of one frame header; error if it is shorter than
+// kArisFrameHeaderUsedBytes. No value is checked here (arisFrameFromMeta does).
+Result<ArisFrameMeta> decodeArisFrameHeader(std::span<const std::uint8_t> header);
 
 struct SonarRecording {
   int ddf_version = 0;  // 3, 4 or 5 (ARIS)
@@ -60,10 +75,25 @@ struct SonarFileLimits {
 // ARIS beams per PingMode (1-2 -> 48, 3-5 -> 96, 6-8 -> 64, 9-12 -> 128); error otherwise.
 Result<int> arisBeamsForPingMode(std::uint32_t ping_mode);
 
+// The frame a header describes, samples left empty: beams from PingMode, `samples` per beam,
+// stamp from FrameTime, window from SampleStartDelay, SamplePeriod and SoundSpeed. Error (naming
+// the field and its value) if PingMode is unknown, beams or samples exceed the limits, the sound
+// speed is outside [1000, 2000] m/s or SamplePeriod is 0. Shared by the file and live paths.
+Result<SonarFrame> arisFrameFromMeta(const ArisFrameMeta& meta, std::uint32_t samples, const SonarFileLimits& limits);
+
 Result<SonarRecording> decodeArisFile(std::span<const std::uint8_t> bytes, const SonarFileLimits& limits = {});
 // Frames must share beams and samples; beams must be 48, 64, 96 or 128. SampleStartDelay and
 // SamplePeriod are rounded to whole microseconds (the window after a round trip is the quantised one).
 Result<std::vector<std::uint8_t>> encodeArisFile(std::span<const SonarFrame> frames);
+
+// The ARIS frame header fields a frame does not determine.
+struct ArisHeaderOptions {
+  std::uint32_t ping_mode = 1;        // must have the frame's beam count
+  bool reordered_samples = true;      // ReorderedSamples: false when the data will be in sonar order
+  std::uint32_t settings_cookie = 0;  // AppliedSettings
+};
+// The 1024-byte ARIS frame header of `frame`, as encodeArisFile writes it (same rounding and errors).
+Result<std::vector<std::uint8_t>> encodeArisFrameHeader(const SonarFrame& frame, const ArisHeaderOptions& options);
 
 // DDF v3, v4 (and v5, forwarded to decodeArisFile).
 Result<SonarRecording> decodeDdfFile(std::span<const std::uint8_t> bytes, const SonarFileLimits& limits = {});
