@@ -1,18 +1,19 @@
 #include "vog/sonar/aris_command.hpp"
 
+#include "aris_protobuf.hpp"
 #include "vog/sonar/aris_commands.pb.h"
 
 #include <algorithm>
 #include <cassert>
-#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-#include <type_traits>
 #include <utility>
 
 namespace vog::sonar {
 namespace {
+
+using detail::parsed;
 
 constexpr std::size_t kLengthPrefixBytes = 4;
 
@@ -38,16 +39,16 @@ constexpr std::array<std::string_view, kArisCommandRefusalCount> kRefusalNames =
 constexpr std::array<std::string_view, 12> kMonths = {"Jan", "Feb", "Mar", "Apr", "May", "Jun",
                                                       "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"};
 
-// A frame of the interpacket delay longer than this per packet would take seconds to send.
+// Our bound (the SDK gives none): at 10 ms per packet a frame of 100 packets already takes 1 s.
 constexpr std::uint32_t kInterpacketDelayMaxUs = 10000;
 
 // ARIS Integration SDK, common/platform-dotnet/SoundMetrics.Aris.Core, SystemConfiguration (per
 // model: ping modes, window start/end, sample start delay, sample period, cycle period, pulse width
 // limits and multiplier per frequency, cumulative pulse per second).
 constexpr std::array<ArisModelLimits, 3> kModels = {{
-    {"ARIS 1800", {1, 3}, 3, 0.7, 25.0, 1.3, 50.0, 930, 36000, 4, 20, 1802, 80000, {6, 24, 1.5}, {6, 40, 1.0}, 300},
-    {"ARIS 3000", {6, 9}, 9, 0.7, 12.0, 1.3, 20.0, 930, 18000, 4, 12, 1802, 40000, {6, 16, 2.0}, {6, 24, 1.5}, 240},
-    {"ARIS 1200", {1, 1}, 1, 0.7, 40.0, 1.3, 100.0, 930, 60000, 4, 40, 1802, 150000, {8, 60, 1.0}, {8, 80, 1.0}, 400},
+    {"ARIS 1800", {1, 3}, 0.7, 25.0, 1.3, 50.0, 930, 36000, 4, 20, 1802, 80000, {6, 24, 1.5}, {6, 40, 1.0}, 300},
+    {"ARIS 3000", {6, 9}, 0.7, 12.0, 1.3, 20.0, 930, 18000, 4, 12, 1802, 40000, {6, 16, 2.0}, {6, 24, 1.5}, 240},
+    {"ARIS 1200", {1, 1}, 0.7, 40.0, 1.3, 100.0, 930, 60000, 4, 40, 1802, 150000, {8, 60, 1.0}, {8, 80, 1.0}, 400},
 }};
 
 std::string num(double v) {
@@ -66,11 +67,6 @@ std::string range(double lo, double hi) {
 }
 
 bool within(double v, double lo, double hi) { return v >= lo && v <= hi; }  // false for NaN
-
-bool parsed(google::protobuf::MessageLite& msg, std::span<const std::uint8_t> bytes) {
-  return bytes.size() <= static_cast<std::size_t>(INT_MAX) &&
-         msg.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
-}
 
 bool isModelPingMode(const ArisModelLimits& m, std::uint32_t mode) {
   return std::find(m.ping_modes.begin(), m.ping_modes.end(), mode) != m.ping_modes.end();
@@ -127,10 +123,14 @@ bool isIpv4(std::string_view ip) {
   return true;
 }
 
-template <class... F>
-struct Overloaded : F... {
-  using F::operator()...;
-};
+// The wire names of ArisCommand's alternatives, in their order.
+constexpr std::array<std::string_view, std::variant_size_v<ArisCommand>> kCommandNames = {"SET_DATETIME",
+                                                                                          "SET_FRAMESTREAM_RECEIVER",
+                                                                                          "SET_FRAMESTREAM_SETTINGS",
+                                                                                          "SET_ACOUSTICS",
+                                                                                          "SET_SALINITY",
+                                                                                          "SET_FOCUS",
+                                                                                          "PING"};
 
 void fill(aris::Command& msg, const ArisSetDateTime& c) {
   msg.set_type(aris::Command::SET_DATETIME);
@@ -348,27 +348,16 @@ std::optional<ArisCommandCheck> check(const ArisPing&, const ArisModelLimits&) {
 
 // ---- Commands ----
 
-std::string_view arisCommandName(const ArisCommand& command) {
-  return std::visit(
-      Overloaded{[](const ArisSetDateTime&) { return std::string_view("SET_DATETIME"); },
-                 [](const ArisSetFrameStreamReceiver&) { return std::string_view("SET_FRAMESTREAM_RECEIVER"); },
-                 [](const ArisSetFrameStreamSettings&) { return std::string_view("SET_FRAMESTREAM_SETTINGS"); },
-                 [](const ArisAcousticSettings&) { return std::string_view("SET_ACOUSTICS"); },
-                 [](const ArisSetSalinity&) { return std::string_view("SET_SALINITY"); },
-                 [](const ArisSetFocus&) { return std::string_view("SET_FOCUS"); },
-                 [](const ArisPing&) { return std::string_view("PING"); }},
-      command);
-}
+std::string_view arisCommandName(const ArisCommand& command) { return kCommandNames[command.index()]; }
 
 std::vector<std::uint8_t> encodeArisCommand(const ArisCommand& command) {
   aris::Command msg;
   std::visit([&](const auto& c) { fill(msg, c); }, command);
-  const std::size_t n = msg.ByteSizeLong();
-  std::vector<std::uint8_t> out(kLengthPrefixBytes + n);
+  std::vector<std::uint8_t> out = detail::serialized(msg, kLengthPrefixBytes);
+  const std::size_t n = out.size() - kLengthPrefixBytes;
   for (std::size_t i = 0; i < kLengthPrefixBytes; ++i) {
     out[i] = static_cast<std::uint8_t>(n >> (8 * (kLengthPrefixBytes - 1 - i)));
   }
-  msg.SerializeToArray(out.data() + kLengthPrefixBytes, static_cast<int>(n));
   return out;
 }
 

@@ -91,6 +91,9 @@ TEST(ArisCommandWire, BytesAreTheProtocolsExactly) {
 }
 
 TEST(ArisCommandWire, EveryCommandDecodesToItself) {
+  EXPECT_EQ(arisCommandName(ArisSetDateTime{}), "SET_DATETIME");
+  EXPECT_EQ(arisCommandName(ArisAcousticSettings{}), "SET_ACOUSTICS");
+  EXPECT_EQ(arisCommandName(ArisPing{}), "PING");
   for (const auto& c : everyCommand()) {
     SCOPED_TRACE(std::string(arisCommandName(c)));
     ArisCommandDecoder decoder;

@@ -164,7 +164,9 @@ struct ArisCommandDecoderStats {
   std::uint64_t refusedTotal() const;
 };
 
-// Reads length-prefixed aris.Command messages from a byte stream cut anywhere.
+// Reads length-prefixed aris.Command messages from a byte stream cut anywhere. A message's payloads
+// other than the one its type needs are ignored, as are unknown fields; PING is read with or without
+// its empty payload.
 // Lifecycle: construct with a valid config, feed() every chunk read from the connection in order;
 // once closed() (a length prefix out of bounds), every further byte is ignored and the connection
 // should be closed. Invariants: at most 4 + max_message_bytes bytes stay buffered between calls
@@ -204,7 +206,6 @@ std::optional<ArisCommandCheck> validateArisCommand(const ArisCommand& command, 
 struct ArisModelLimits {
   std::string_view name;                    // "ARIS 1800"
   std::array<std::uint32_t, 2> ping_modes;  // a model with one ping mode lists it twice
-  std::uint32_t default_ping_mode;
   double window_start_min_m, window_start_max_m;
   double window_end_min_m, window_end_max_m;
   std::uint32_t sample_start_delay_min_us, sample_start_delay_max_us;
