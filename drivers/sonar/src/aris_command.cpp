@@ -51,10 +51,24 @@ constexpr std::array<ArisModelLimits, 3> kModels = {{
     {"ARIS 1200", {1, 1}, 0.7, 40.0, 1.3, 100.0, 930, 60000, 4, 40, 1802, 150000, {8, 60, 1.0}, {8, 80, 1.0}, 400},
 }};
 
+// A value for an error detail: integers exactly (a uint32 field is never rounded), others in %g.
 std::string num(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
+  if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 1e15) {
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  } else {
+    std::snprintf(buf, sizeof buf, "%g", v);
+  }
   return buf;
+}
+
+// Text from the wire for an error detail: at most 32 bytes, anything unprintable as '?'.
+std::string printable(std::string_view text) {
+  std::string out(text.substr(0, 32));
+  for (char& ch : out) {
+    if (ch < 0x20 || ch > 0x7E) ch = '?';
+  }
+  return out;
 }
 
 std::string range(double lo, double hi) {
@@ -252,7 +266,7 @@ FromWire fromWire(const aris::Command::SetFocusPosition& p) {
 std::optional<ArisCommandCheck> check(const ArisSetDateTime& c, const ArisModelLimits&) {
   if (!isArisDateTime(c.date_time)) {
     return ArisCommandCheck{ArisCommandRefusal::kDateTimeInvalid,
-                            "dateTime \"" + c.date_time.substr(0, 32) + "\", not YYYY-Mon-DD HH:MM:SS"};
+                            "dateTime \"" + printable(c.date_time) + "\", not YYYY-Mon-DD HH:MM:SS"};
   }
   return std::nullopt;
 }
@@ -260,7 +274,7 @@ std::optional<ArisCommandCheck> check(const ArisSetDateTime& c, const ArisModelL
 std::optional<ArisCommandCheck> check(const ArisSetFrameStreamReceiver& c, const ArisModelLimits&) {
   if (!isIpv4(c.ip)) {
     return ArisCommandCheck{ArisCommandRefusal::kReceiverAddressInvalid,
-                            "ip \"" + c.ip.substr(0, 32) + "\", not a dotted IPv4 address"};
+                            "ip \"" + printable(c.ip) + "\", not a dotted IPv4 address"};
   }
   if (c.port < 1 || c.port > 65535) {
     return ArisCommandCheck{ArisCommandRefusal::kReceiverPortInvalid,
@@ -355,6 +369,7 @@ std::vector<std::uint8_t> encodeArisCommand(const ArisCommand& command) {
   std::visit([&](const auto& c) { fill(msg, c); }, command);
   std::vector<std::uint8_t> out = detail::serialized(msg, kLengthPrefixBytes);
   const std::size_t n = out.size() - kLengthPrefixBytes;
+  assert(n <= UINT32_MAX);  // a command is tens of bytes; only a string of gigabytes could break this
   for (std::size_t i = 0; i < kLengthPrefixBytes; ++i) {
     out[i] = static_cast<std::uint8_t>(n >> (8 * (kLengthPrefixBytes - 1 - i)));
   }

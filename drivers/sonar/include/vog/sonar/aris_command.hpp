@@ -13,9 +13,10 @@
 // docs/devices-and-simulator.md "ARIS acoustic settings" for the files): per model in ArisModelLimits.
 //
 // Refused commands: the protocol has no negative acknowledgement. The sonar answers a command only
-// through later frames (their AppliedSettings cookie). The mock sonar therefore ignores a refused
-// command and keeps its previous settings, so a client sees the old cookie in the frame headers; it
-// closes the connection only when the stream itself is broken (arisCommandRefusalClosesStream()).
+// through later frames (their AppliedSettings cookie). The mock sonar (not written yet) is to ignore
+// a refused command and keep its previous settings, so a client sees the old cookie in the frame
+// headers, and to close the connection only when the stream itself is broken
+// (arisCommandRefusalClosesStream()).
 
 #include "vog/core/result.hpp"
 
@@ -123,7 +124,7 @@ enum class ArisCommandRefusal : std::uint8_t {
   kReceiverAddressInvalid,  // ip not a dotted IPv4 address
   kReceiverPortInvalid,     // port 0 or above 65535
   kInterpacketDelayOutOfRange,
-  kFrameRateOutOfRange,  // NaN, or outside the model's frame rates
+  kFrameRateOutOfRange,  // NaN, or outside [1, 15] frames/s
   kSamplesPerBeamOutOfRange,
   kSampleStartDelayOutOfRange,
   kSamplePeriodOutOfRange,
@@ -275,9 +276,10 @@ struct ArisDerivedSettings {
 Result<ArisDerivedSettings> deriveArisAcousticSettings(const ArisSonarConfig& config);
 
 // Gives each distinct set of acoustic settings a new cookie, so a frame's AppliedSettings says
-// which settings made it. Lifecycle: one per connection; stamp() every SET_ACOUSTICS before sending.
-// Invariant: the cookie changes exactly when the settings (other than the cookie) change; it is
-// never 0 (0 is the header of a sonar that received no settings).
+// which settings made it. Lifecycle: one per sonar, kept across reconnections (so no two settings
+// share a cookie); stamp() every SET_ACOUSTICS before sending it. Invariant: the cookie changes
+// exactly when the settings (other than the cookie) change; it is never 0, so frames made before
+// any stamped settings are told apart.
 class ArisSettingsCookies {
  public:
   // Sets settings.cookie: the last one if the settings are those last stamped, the next otherwise.
