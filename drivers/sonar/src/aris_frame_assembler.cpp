@@ -1,19 +1,20 @@
 #include "vog/sonar/aris_frame_assembler.hpp"
 
+#include "aris_protobuf.hpp"
 #include "vog/sonar/aris_frame_stream.pb.h"
 #include "vog/sonar/aris_reorder.hpp"
 
-#include <google/protobuf/message_lite.h>
-
 #include <algorithm>
 #include <cassert>
-#include <climits>
 #include <cmath>
 #include <numeric>
 #include <utility>
 
 namespace vog::sonar {
 namespace {
+
+using detail::parsed;
+using detail::serialized;
 
 // Completed frames remembered so that a part resent after a lost final ack is answered N again
 // instead of starting the frame over.
@@ -25,17 +26,6 @@ constexpr std::array<std::string_view, kArisPartRefusalCount> kRefusalNames = {
     "too_fragmented",       "too_many_frames_in_flight"};
 
 std::string frameName(std::int32_t frame_index) { return "ARIS frame " + std::to_string(frame_index); }
-
-std::vector<std::uint8_t> serialized(const google::protobuf::MessageLite& msg) {
-  std::vector<std::uint8_t> out(msg.ByteSizeLong());
-  msg.SerializeToArray(out.data(), static_cast<int>(out.size()));
-  return out;
-}
-
-bool parsed(google::protobuf::MessageLite& msg, std::span<const std::uint8_t> bytes) {
-  return bytes.size() <= static_cast<std::size_t>(INT_MAX) &&
-         msg.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
-}
 
 }  // namespace
 
