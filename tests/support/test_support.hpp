@@ -14,6 +14,9 @@ std::filesystem::path sourceDir();
 // Every byte of a file (empty when it cannot be read).
 std::string readFile(const std::filesystem::path& file);
 
+// Whether text contains what (error messages that must name a value).
+inline bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
+
 // A fresh directory under the system temp dir, removed with its content on destruction.
 class TempDir {
  public:

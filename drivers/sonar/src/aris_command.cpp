@@ -17,24 +17,25 @@ using detail::parsed;
 
 constexpr std::size_t kLengthPrefixBytes = 4;
 
-constexpr std::array<std::string_view, kArisCommandRefusalCount> kRefusalNames = {"length_out_of_bounds",
-                                                                                  "undecodable",
-                                                                                  "unsupported_type",
-                                                                                  "payload_missing",
-                                                                                  "field_missing",
-                                                                                  "date_time_invalid",
-                                                                                  "receiver_address_invalid",
-                                                                                  "receiver_port_invalid",
-                                                                                  "interpacket_delay_out_of_range",
-                                                                                  "frame_rate_out_of_range",
-                                                                                  "samples_per_beam_out_of_range",
-                                                                                  "sample_start_delay_out_of_range",
-                                                                                  "sample_period_out_of_range",
-                                                                                  "cycle_period_out_of_range",
-                                                                                  "pulse_width_out_of_range",
-                                                                                  "ping_mode_unknown",
-                                                                                  "receiver_gain_out_of_range",
-                                                                                  "focus_range_out_of_range"};
+constexpr std::array<std::string_view, kArisCommandRefusalCount> kCommandRefusalNames = {
+    "length_out_of_bounds",
+    "undecodable",
+    "unsupported_type",
+    "payload_missing",
+    "field_missing",
+    "date_time_invalid",
+    "receiver_address_invalid",
+    "receiver_port_invalid",
+    "interpacket_delay_out_of_range",
+    "frame_rate_out_of_range",
+    "samples_per_beam_out_of_range",
+    "sample_start_delay_out_of_range",
+    "sample_period_out_of_range",
+    "cycle_period_out_of_range",
+    "pulse_width_out_of_range",
+    "ping_mode_unknown",
+    "receiver_gain_out_of_range",
+    "focus_range_out_of_range"};
 
 constexpr std::array<std::string_view, 12> kMonths = {"Jan", "Feb", "Mar", "Apr", "May", "Jun",
                                                       "Jul", "Aug", "Sep", "Oct", "Nov", "Dec"};
@@ -400,7 +401,7 @@ std::string arisDateTimeText(std::int64_t unix_time_s) {
 // ---- Sonar side ----
 
 std::string_view arisCommandRefusalName(ArisCommandRefusal reason) {
-  return kRefusalNames[static_cast<std::size_t>(reason)];
+  return kCommandRefusalNames[static_cast<std::size_t>(reason)];
 }
 
 bool arisCommandRefusalClosesStream(ArisCommandRefusal reason) {

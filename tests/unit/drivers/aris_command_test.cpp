@@ -1,6 +1,7 @@
 // ARIS live protocol, command channel: wire bytes, the sonar-side stream decoder and checks, and the
 // acoustic settings derived from a range window.
 #include "vog/sonar/aris_command.hpp"
+#include "test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,8 +19,6 @@ using Bytes = std::vector<std::uint8_t>;
 using R = ArisCommandRefusal;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
 
 Bytes cat(std::initializer_list<Bytes> parts) {
   Bytes out;
@@ -185,7 +184,7 @@ TEST(ArisCommandDecoder, MalformedMessagesAreRefusedAndTheStreamGoesOn) {
     ASSERT_TRUE(out[0].refusal);
     EXPECT_EQ(*out[0].refusal, c.reason);
     EXPECT_FALSE(out[0].command);
-    EXPECT_TRUE(contains(out[0].refusal_detail, c.detail)) << out[0].refusal_detail;
+    EXPECT_TRUE(test::contains(out[0].refusal_detail, c.detail)) << out[0].refusal_detail;
     EXPECT_FALSE(arisCommandRefusalClosesStream(c.reason));
     ASSERT_TRUE(out[1].command);  // the next message is read
     EXPECT_FALSE(decoder.closed());
@@ -208,7 +207,7 @@ TEST(ArisCommandDecoder, LengthAboveTheLimitClosesTheStream) {
   ASSERT_EQ(out.size(), 1u);
   ASSERT_TRUE(out[0].refusal);
   EXPECT_EQ(*out[0].refusal, R::kLengthOutOfBounds);
-  EXPECT_TRUE(contains(out[0].refusal_detail, "length prefix 26 above max_message_bytes 25"));
+  EXPECT_TRUE(test::contains(out[0].refusal_detail, "length prefix 26 above max_message_bytes 25"));
   EXPECT_TRUE(arisCommandRefusalClosesStream(R::kLengthOutOfBounds));
   EXPECT_TRUE(decoder.closed());
   // Whatever follows is not read.
@@ -228,7 +227,7 @@ TEST(ArisCommandDecoder, ConfigErrorsNameTheKey) {
   EXPECT_TRUE(ArisCommandDecoderConfig{}.validate().ok());
   const Status st = ArisCommandDecoderConfig{.max_message_bytes = 8}.validate();
   ASSERT_FALSE(st.ok());
-  EXPECT_TRUE(contains(st.error().message, "max_message_bytes: 8"));
+  EXPECT_TRUE(test::contains(st.error().message, "max_message_bytes: 8"));
 }
 
 // ---- Validation as a device would ----
@@ -302,7 +301,7 @@ TEST(ArisCommandCheck, OutOfRangeValuesAreRefusedNamingFieldAndValue) {
     const auto r = validateArisCommand(c.command, ArisSystemType::k1800);
     ASSERT_TRUE(r);
     EXPECT_EQ(r->reason, c.reason) << arisCommandRefusalName(r->reason);
-    EXPECT_TRUE(contains(r->detail, c.detail)) << r->detail;
+    EXPECT_TRUE(test::contains(r->detail, c.detail)) << r->detail;
     // What the device refuses, the wire carries unchanged: the mock sees the same value.
     ArisCommandDecoder decoder;
     const auto decoded = decoder.feed(encodeArisCommand(c.command));
@@ -566,7 +565,7 @@ TEST(ArisAcousticDerivation, BadInputsAreErrorsNamingTheKeyAndValue) {
     b.change(config);
     const auto d = deriveArisAcousticSettings(config);
     ASSERT_FALSE(d.ok());
-    EXPECT_TRUE(contains(d.error().message, b.error)) << d.error().message;
+    EXPECT_TRUE(test::contains(d.error().message, b.error)) << d.error().message;
   }
 }
 

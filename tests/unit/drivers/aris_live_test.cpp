@@ -24,8 +24,6 @@ std::vector<std::uint8_t> randomBytes(std::size_t n, std::uint32_t seed) {
   return v;
 }
 
-bool contains(const std::string& text, const std::string& what) { return text.find(what) != std::string::npos; }
-
 // ---- Reordering ----
 
 struct Vector {
@@ -83,14 +81,14 @@ TEST(ArisReorder, UnknownPingModeOrWrongSizeIsAnErrorNamingTheValue) {
   for (const std::uint32_t mode : {0u, 13u}) {
     const Status st = arisSonarToBeamOrder(mode, 10, in, out);
     ASSERT_FALSE(st.ok());
-    EXPECT_TRUE(contains(st.error().message, "PingMode " + std::to_string(mode))) << st.error().message;
+    EXPECT_TRUE(test::contains(st.error().message, "PingMode " + std::to_string(mode))) << st.error().message;
   }
   const Status short_in = arisSonarToBeamOrder(1, 10, std::span(in).first(479), out);
   ASSERT_FALSE(short_in.ok());
-  EXPECT_TRUE(contains(short_in.error().message, "480 bytes, got 479 in")) << short_in.error().message;
+  EXPECT_TRUE(test::contains(short_in.error().message, "480 bytes, got 479 in")) << short_in.error().message;
   const Status wrong_samples = arisBeamToSonarOrder(1, 11, in, out);
   ASSERT_FALSE(wrong_samples.ok());
-  EXPECT_TRUE(contains(wrong_samples.error().message, "11 samples")) << wrong_samples.error().message;
+  EXPECT_TRUE(test::contains(wrong_samples.error().message, "11 samples")) << wrong_samples.error().message;
 }
 
 // ../shared/data/aris/sample.aris was written by ARIScope: its frames say ReorderedSamples = 1
@@ -109,7 +107,7 @@ TEST(ArisHeader, RealSampleFramesAreMarkedReordered) {
   // A header shorter than the fields read is an error that says how short.
   const auto short_header = decodeArisFrameHeader(std::span(*bytes).subspan(1024, kArisFrameHeaderUsedBytes - 1));
   ASSERT_FALSE(short_header.ok());
-  EXPECT_TRUE(contains(short_header.error().message, "683 bytes")) << short_header.error().message;
+  EXPECT_TRUE(test::contains(short_header.error().message, "683 bytes")) << short_header.error().message;
 }
 
 // ---- Wire format (field numbers of PROTOCOLS.md) ----
@@ -369,7 +367,7 @@ void expectRefused(const ArisPartResult& r, ArisPartRefusal reason, const std::s
   EXPECT_EQ(*r.refusal, reason) << arisPartRefusalName(*r.refusal) << ": " << r.refusal_detail;
   EXPECT_FALSE(r.ack);
   EXPECT_FALSE(r.frame);
-  EXPECT_TRUE(contains(r.refusal_detail, detail)) << r.refusal_detail << " does not name " << detail;
+  EXPECT_TRUE(test::contains(r.refusal_detail, detail)) << r.refusal_detail << " does not name " << detail;
 }
 
 std::vector<std::uint8_t> serialize(const frame_stream::FramePart& part) {
@@ -483,10 +481,10 @@ TEST(ArisAssembler, ConfigValidationNamesTheKey) {
   EXPECT_TRUE(ArisFrameAssemblerConfig{}.validate().ok());
   const Status age = ArisFrameAssemblerConfig{.max_frame_age_s = -1.0}.validate();
   ASSERT_FALSE(age.ok());
-  EXPECT_TRUE(contains(age.error().message, "max_frame_age_s: -1")) << age.error().message;
+  EXPECT_TRUE(test::contains(age.error().message, "max_frame_age_s: -1")) << age.error().message;
   const Status beams = ArisFrameAssemblerConfig{.max_beams = 200}.validate();
   ASSERT_FALSE(beams.ok());
-  EXPECT_TRUE(contains(beams.error().message, "max_beams: 200")) << beams.error().message;
+  EXPECT_TRUE(test::contains(beams.error().message, "max_beams: 200")) << beams.error().message;
   EXPECT_FALSE(ArisFrameAssemblerConfig{.max_frames_in_flight = 0}.validate().ok());
   EXPECT_FALSE(ArisFrameAssemblerConfig{.max_ranges_per_frame = 0}.validate().ok());
 }

@@ -13,7 +13,7 @@
 // docs/devices-and-simulator.md "ARIS acoustic settings" for the files): per model in ArisModelLimits.
 //
 // Refused commands: the protocol has no negative acknowledgement. The sonar answers a command only
-// through later frames (their AppliedSettings cookie). The mock sonar (not written yet) is to ignore
+// through later frames (their AppliedSettings cookie). The mock sonar is to ignore
 // a refused command and keep its previous settings, so a client sees the old cookie in the frame
 // headers, and to close the connection only when the stream itself is broken
 // (arisCommandRefusalClosesStream()).
