@@ -141,7 +141,8 @@ ArisAckOutcome ArisFrameSender::onAck(std::span<const std::uint8_t> datagram, do
 
 std::vector<ArisFrameSender::Datagram> ArisFrameSender::poll(double now_s) {
   std::vector<Datagram> out;
-  if (!in_flight_ || now_s < in_flight_->quiet_since_s + config_.retry_timeout_s) return out;
+  // Written so that a NaN time resends nothing.
+  if (!in_flight_ || !(now_s >= in_flight_->quiet_since_s + config_.retry_timeout_s)) return out;
   InFlight& f = *in_flight_;
   if (f.retries >= config_.max_retries) {
     giveUp(/*for_next_frame=*/false);

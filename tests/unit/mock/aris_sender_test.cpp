@@ -91,6 +91,7 @@ TEST(ArisFrameSender, RoundTripWithoutLossDeliversTheFrameBitIdentical) {
       const SonarFrame f = liveFrame(c.ping_mode, c.samples, index, index * 7 + c.ping_mode);
       const double t = index * kFramePeriod_s;
       const auto datagrams =
+          // reordered_samples is cleared by the sender: the data goes in sonar order.
           sender.send(f, {.ping_mode = c.ping_mode, .reordered_samples = true, .settings_cookie = cookie}, t);
       ASSERT_TRUE(datagrams.ok()) << datagrams.error().message;
       const std::size_t n = f.samples.size();

@@ -83,7 +83,9 @@ enum class ArisAckOutcome : std::uint8_t {
 
 // Lifecycle: construct with a valid config; send() each frame when the sonar pings, with the time;
 // onAck() each ack datagram that arrives, with the time; poll() whenever the time reaches
-// nextDeadline() (calling it at other times is harmless). Between frames the sender is idle.
+// nextDeadline() (calling it at other times is harmless). Between frames the sender is idle. Times
+// are the caller's clock in seconds (any epoch, finite, non-decreasing); a NaN passed to poll()
+// resends nothing, and a frame whose timer a NaN broke is given up when the next frame is sent.
 // Invariants: at most one frame is in flight; its data (sonar order) and header are kept until it
 // finishes or is given up; retry_point only rises and stays in [0, N); retries <= max_retries.
 // Not thread-safe: one owner makes every call.
