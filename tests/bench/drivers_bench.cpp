@@ -1,12 +1,14 @@
 // vog-bench drivers: PD0 decode throughput (MB/s), sonar range extraction (frames/s on 96 x 512
 // frames) and the ARIS live path (frames/s: FramePart datagrams assembled, reordered and their
 // ranges extracted, for 128 x 512 and 96 x 2000 frames), single thread, medians over repeats.
-// Targets: >= 100 MB/s and >= 2000 frames/s.
+// Targets: >= 100 MB/s and >= 2000 frames/s. Also the ARIS link's loss figures: frames lost per frame
+// sent and datagrams resent per frame, mock sonar to receiver over a seeded lossy channel.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/codec/stream_decoder.hpp"
 #include "vog/dvl/pd0.hpp"
+#include "vog/mock/aris_frame_sender.hpp"
 #include "vog/sonar/aris_frame_assembler.hpp"
 #include "vog/sonar/aris_reorder.hpp"
 #include "vog/sonar/sonar_files.hpp"
@@ -16,10 +18,13 @@
 
 #include <algorithm>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
 #include <random>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -116,6 +121,62 @@ std::optional<double> arisFramesPerSecond(const std::vector<std::vector<std::uin
   return frames / s;
 }
 
+// The ARIS link under loss: `frames` frames sent by the mock sonar (ArisFrameSender) at
+// `frame_rate_hz` of simulated time to a receiver with the default config; every datagram and every
+// ack is lost with probability `loss` (seeded), none is delayed. The sender is polled at its
+// deadlines until the next frame is due (the last frame until it is done).
+struct ArisLossFigures {
+  std::uint64_t frames_sent = 0;
+  std::uint64_t frames_delivered = 0;
+  std::uint64_t frames_with_a_lost_part = 0;  // a datagram of the frame (first send or resend) was lost
+  std::uint64_t datagrams_resent = 0;
+  std::uint64_t frames_given_up = 0;
+  std::uint64_t receiver_refused = 0;
+};
+
+std::optional<ArisLossFigures> arisLossFigures(const std::vector<vog::sonar::SonarFrame>& images,
+                                               std::uint32_t ping_mode, int frames, double frame_rate_hz,
+                                               const vog::mock::ArisFrameSenderConfig& config, double loss,
+                                               unsigned seed) {
+  vog::mock::ArisFrameSender sender(config);
+  vog::sonar::ArisFrameAssembler receiver;
+  std::mt19937 rng(seed);
+  std::bernoulli_distribution lost(loss);
+  ArisLossFigures out;
+  bool part_lost = false;  // of the frame being sent
+  const auto deliver = [&](const std::vector<vog::mock::ArisFrameSender::Datagram>& datagrams, double t) {
+    for (const auto& d : datagrams) {
+      if (lost(rng)) {
+        part_lost = true;
+        continue;
+      }
+      const auto r = receiver.add(d, t);
+      if (r.frame) ++out.frames_delivered;
+      if (r.ack && !lost(rng)) sender.onAck(vog::sonar::encodeArisFramePartAck(*r.ack), t);
+    }
+  };
+  for (int k = 0; k < frames; ++k) {
+    vog::sonar::SonarFrame f = images[static_cast<std::size_t>(k) % images.size()];
+    f.frame_index = static_cast<std::uint32_t>(k + 1);
+    const double t0 = k / frame_rate_hz;
+    const double next_s = k + 1 < frames ? (k + 1) / frame_rate_hz : std::numeric_limits<double>::infinity();
+    const auto parts = sender.send(f, {.ping_mode = ping_mode}, t0);
+    if (!parts.ok()) return std::nullopt;
+    part_lost = false;
+    deliver(*parts, t0);
+    while (const auto deadline = sender.nextDeadline()) {
+      if (*deadline >= next_s) break;
+      deliver(sender.poll(*deadline), *deadline);
+    }
+    out.frames_with_a_lost_part += part_lost ? 1 : 0;
+  }
+  out.frames_sent = sender.stats().frames_sent;
+  out.datagrams_resent = sender.stats().datagrams_resent;
+  out.frames_given_up = sender.stats().frames_given_up;
+  out.receiver_refused = receiver.stats().refusedTotal();
+  return out;
+}
+
 }  // namespace
 
 VOG_BENCH_COMMAND(drivers,
@@ -124,6 +185,7 @@ VOG_BENCH_COMMAND(drivers,
   int megabytes = 16;
   int frames = 2000;
   int aris_frames = 200;
+  int aris_loss_frames = 300;
   std::size_t aris_part_bytes = 8192;
   unsigned seed = 1;
   bool json = false;
@@ -134,7 +196,9 @@ VOG_BENCH_COMMAND(drivers,
   app.add_option("--aris-frames", aris_frames, "ARIS frames per repeat")->check(CLI::Range(1, 10000));
   app.add_option("--aris-part-bytes", aris_part_bytes, "frame data bytes per FramePart datagram")
       ->check(CLI::Range(64, 65000));
-  app.add_option("--seed", seed, "data seed");
+  app.add_option("--aris-loss-frames", aris_loss_frames, "ARIS frames per loss case (15 frames/s of simulated time)")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--seed", seed, "data and loss seed");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   std::mt19937 rng(seed);
@@ -198,6 +262,46 @@ VOG_BENCH_COMMAND(drivers,
     }
   }
 
+  // ARIS link under 1 % and 5 % loss both ways, without retry (DROP_PARTIAL_FRAMES) and with it
+  // (PESSIMISTIC_RETRY with the sender's default timeout and retries, resending through the end of
+  // the frame; "retry_one_part": one part per resend). Simulated time: not repeated.
+  struct ArisLossCase {
+    std::string key;
+    double loss;
+    vog::mock::ArisPacketLossMitigation mode;
+    std::size_t max_parts_per_resend;
+    ArisLossFigures figures;
+  };
+  using vog::mock::ArisPacketLossMitigation;
+  std::vector<ArisLossCase> loss_cases;
+  for (const auto& [pct, loss] : {std::pair{"1pct", 0.01}, std::pair{"5pct", 0.05}}) {
+    const std::string prefix = std::string("aris_loss_") + pct;
+    loss_cases.push_back({prefix + "_drop", loss, ArisPacketLossMitigation::kDropPartialFrames, 0, {}});
+    loss_cases.push_back({prefix + "_retry", loss, ArisPacketLossMitigation::kPessimisticRetry, 0, {}});
+    loss_cases.push_back({prefix + "_retry_one_part", loss, ArisPacketLossMitigation::kPessimisticRetry, 1, {}});
+  }
+  const vog::mock::ArisFrameSenderConfig sender_defaults;
+  {
+    std::vector<vog::sonar::SonarFrame> images;
+    for (int i = 0; i < 16; ++i) images.push_back(benchFrame(128, 512, rng));
+    for (auto& c : loss_cases) {
+      vog::mock::ArisFrameSenderConfig sender_config = sender_defaults;
+      sender_config.mode = c.mode;
+      sender_config.max_parts_per_resend = c.max_parts_per_resend;
+      sender_config.part_bytes = aris_part_bytes;
+      if (const vog::Status valid = sender_config.validate(); !valid.ok()) {
+        std::cerr << "drivers bench: " << valid.error().message << "\n";
+        return 1;
+      }
+      const auto figures = arisLossFigures(images, 9, aris_loss_frames, 15.0, sender_config, c.loss, seed);
+      if (!figures) {
+        std::cerr << "drivers bench: " << c.key << ": the sender refused a frame\n";
+        return 1;
+      }
+      c.figures = *figures;
+    }
+  }
+
   vog::bench::JsonObject j;
   j.add("pd0_stream_bytes", static_cast<std::int64_t>(stream.size()));
   j.add("pd0_ensembles", static_cast<std::int64_t>(n));
@@ -209,6 +313,18 @@ VOG_BENCH_COMMAND(drivers,
   for (const auto& c : aris_cases) j.add(std::string(c.key) + "_frames_per_s_median", vog::bench::median(c.fps));
   j.add("aris_frames_per_repeat", aris_frames);
   j.add("aris_part_bytes", static_cast<std::int64_t>(aris_part_bytes));
+  for (const auto& c : loss_cases) {
+    const auto sent = static_cast<double>(c.figures.frames_sent);
+    j.add(c.key + "_frames_lost_ratio", static_cast<double>(c.figures.frames_sent - c.figures.frames_delivered) / sent);
+    j.add(c.key + "_datagrams_resent_per_frame", static_cast<double>(c.figures.datagrams_resent) / sent);
+    j.add(c.key + "_frames_with_a_lost_part_ratio", static_cast<double>(c.figures.frames_with_a_lost_part) / sent);
+    j.add(c.key + "_frames_given_up", static_cast<std::int64_t>(c.figures.frames_given_up));
+    j.add(c.key + "_receiver_refused", static_cast<std::int64_t>(c.figures.receiver_refused));
+  }
+  j.add("aris_loss_frames", aris_loss_frames);
+  j.add("aris_loss_frame_rate_hz", 15.0);
+  j.add("aris_loss_retry_timeout_s", sender_defaults.retry_timeout_s);
+  j.add("aris_loss_max_retries", sender_defaults.max_retries);
   j.add("repeats", repeats);
   std::cout << j.str();
   return 0;
