@@ -199,9 +199,18 @@ ArisPartResult ArisFrameAssembler::add(std::span<const std::uint8_t> datagram, d
     return refuse(ArisPartRefusal::kTotalSizeChanged, where + ": total_data_size " + std::to_string(total) +
                                                           ", earlier parts said " + std::to_string(it->total));
   }
+  // Full: a newer frame takes the place of the oldest incomplete one (in DROP_PARTIAL_FRAMES every
+  // lost datagram leaves a frame that never completes; refusing newer frames until those age out
+  // would lose whole frames that arrive intact). A part older than every frame held is refused.
+  std::vector<Partial>::iterator oldest = partial_.end();
   if (it == partial_.end() && partial_.size() >= config_.max_frames_in_flight) {
-    return refuse(ArisPartRefusal::kTooManyFramesInFlight,
-                  where + ": " + std::to_string(partial_.size()) + " frames already incomplete (max_frames_in_flight)");
+    oldest = std::min_element(partial_.begin(), partial_.end(),
+                              [](const Partial& x, const Partial& y) { return x.frame_index < y.frame_index; });
+    if (oldest->frame_index > index) {
+      return refuse(
+          ArisPartRefusal::kTooManyFramesInFlight,
+          where + ": " + std::to_string(partial_.size()) + " newer frames already incomplete (max_frames_in_flight)");
+    }
   }
 
   // The ranges the part touches (overlapping or adjacent) merge into one.
@@ -231,6 +240,10 @@ ArisPartResult ArisFrameAssembler::add(std::span<const std::uint8_t> datagram, d
   }
 
   const bool is_new = it == partial_.end();
+  if (oldest != partial_.end()) {
+    partial_.erase(oldest);
+    ++stats_.frames_dropped_incomplete;
+  }
   if (is_new) {
     Partial p;
     p.frame_index = index;

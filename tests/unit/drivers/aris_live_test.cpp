@@ -471,10 +471,32 @@ TEST(ArisAssembler, RefusesTooManyFramesInFlightAndTooFragmentedFrames) {
   EXPECT_EQ(*a.add(f1.parts[0], 0.0).ack, (ArisFramePartAck{1, 2000}));
 
   ASSERT_TRUE(a.add(f2.parts[0], 0.0).ack);
-  expectRefused(a.add(f3.parts[0], 0.0), ArisPartRefusal::kTooManyFramesInFlight, "2 frames");
+  // Full: a newer frame takes the oldest one's place; a part of the evicted (older) frame is refused.
+  ASSERT_TRUE(a.add(f3.parts[0], 0.0).ack);
+  EXPECT_EQ(a.stats().frames_dropped_incomplete, 1u);
+  expectRefused(a.add(f1.parts[4], 0.0), ArisPartRefusal::kTooManyFramesInFlight, "2 newer frames");
   EXPECT_EQ(a.stats().refusedBy(ArisPartRefusal::kTooFragmented), 1u);
   EXPECT_EQ(a.stats().refusedBy(ArisPartRefusal::kTooManyFramesInFlight), 1u);
   EXPECT_EQ(a.framesInFlight(), 2u);
+  for (const auto& part : f3.parts) (void)a.add(part, 0.0);
+  EXPECT_EQ(a.stats().frames_completed, 1u);
+}
+
+// DROP_PARTIAL_FRAMES under loss: frames that never complete fill the frames in flight, and every
+// frame that arrives whole after them is still delivered (none waits for the incomplete ones to age out).
+TEST(ArisAssembler, IncompleteFramesDoNotBlockWholeFramesThatFollow) {
+  ArisFrameAssembler a({.max_frames_in_flight = 4});
+  std::uint64_t delivered = 0;
+  for (std::uint32_t index = 1; index <= 20; ++index) {
+    const Sent s = sonarSends(liveFrame(1, 100, index, 20 + index), 1, 1000);
+    const bool lossy = index <= 6;  // the first six each lose their last part
+    for (std::size_t k = 0; k + (lossy ? 1 : 0) < s.parts.size(); ++k) {
+      if (a.add(s.parts[k], 0.01 * index).frame) ++delivered;
+    }
+  }
+  EXPECT_EQ(delivered, 14u);
+  EXPECT_EQ(a.stats().refusedTotal(), 0u);
+  EXPECT_EQ(a.stats().frames_dropped_incomplete, 6u);
 }
 
 TEST(ArisAssembler, ConfigValidationNamesTheKey) {

@@ -62,7 +62,7 @@ enum class ArisPartRefusal : std::uint8_t {
   kHeaderInvalid,          // PingMode, SamplesPerBeam, SoundSpeed or SamplePeriod unusable, or
                            // beams x SamplesPerBeam != total_data_size
   kTooFragmented,          // the frame's received bytes would form more than max_ranges_per_frame ranges
-  kTooManyFramesInFlight,  // a part of a new frame while max_frames_in_flight frames are incomplete
+  kTooManyFramesInFlight,  // a part of a frame older than the max_frames_in_flight incomplete ones held
 };
 inline constexpr std::size_t kArisPartRefusalCount = 10;
 static_assert(static_cast<std::size_t>(ArisPartRefusal::kTooManyFramesInFlight) + 1 == kArisPartRefusalCount);
@@ -86,7 +86,7 @@ struct ArisFrameAssemblerConfig {
 struct ArisFrameAssemblerStats {
   std::uint64_t datagrams = 0;
   std::uint64_t frames_completed = 0;
-  std::uint64_t frames_dropped_incomplete = 0;  // a newer frame completed first, or too old
+  std::uint64_t frames_dropped_incomplete = 0;  // a newer frame completed first or took its place, or too old
   std::uint64_t datagrams_duplicated = 0;       // accepted, but every byte had already arrived
   std::array<std::uint64_t, kArisPartRefusalCount> refused{};
 
