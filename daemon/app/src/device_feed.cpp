@@ -1,5 +1,7 @@
 #include "vog/app/device_feed.hpp"
 
+#include "vog/sonar/aris_command.hpp"
+
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -19,6 +21,8 @@ std::size_t indexOf(DeviceId device) {
     case DeviceId::kImu: return 2;
     case DeviceId::kSonar: return 3;
     case DeviceId::kBackseat: return 4;
+    case DeviceId::kArisFrames: return 5;
+    case DeviceId::kArisCommands: return 6;
   }
   return 0;
 }
@@ -39,6 +43,8 @@ const char* toString(DeviceId device) {
     case DeviceId::kImu: return "imu";
     case DeviceId::kSonar: return "sonar";
     case DeviceId::kBackseat: return "backseat";
+    case DeviceId::kArisFrames: return "aris_frames";
+    case DeviceId::kArisCommands: return "aris_commands";
   }
   return "unknown";
 }
@@ -55,6 +61,7 @@ Status DeviceFeedConfig::validate() const {
   if (Status s = imu.validate(); !s.ok()) return Error{"devices.imu." + s.error().message};
   if (Status s = range_extraction.validate(); !s.ok())
     return Error{"devices.sonar.range_extraction." + s.error().message};
+  if (Status s = aris_frames.validate(); !s.ok()) return Error{"devices.sonar.aris." + s.error().message};
   if (Status s = nav.validate("nav"); !s.ok()) return s;
   if (n_beams < 1 || n_beams > 4096)
     return Error{"devices: the fan's beam count " + std::to_string(n_beams) + " is outside [1, 4096]"};
@@ -69,6 +76,7 @@ void FeedOutput::clear() {
   odometry.clear();
   scans.clear();
   acks.clear();
+  aris_acks.clear();
   vehicle_navigation.reset();
 }
 
@@ -95,6 +103,11 @@ std::uint64_t DeviceFeed::droppedInput(DeviceId device) const {
       return r.frames_dropped + r.fragments_rejected;
     }
     case DeviceId::kBackseat: return dropped(backseat_.stats());
+    case DeviceId::kArisFrames: {
+      const sonar::ArisFrameAssemblerStats& a = aris_assembler_.stats();
+      return a.frames_dropped_incomplete + a.refusedTotal();
+    }
+    case DeviceId::kArisCommands: return 0;
   }
   return 0;
 }
@@ -173,9 +186,11 @@ void DeviceFeed::feed(DeviceId device, std::int64_t stamp_ns, std::span<const st
         break;
       }
       ++c.messages;
-      if (auto frame = reassembler_.add(r.frame())) onSonarFrame(*frame, stamp_ns, out);
+      if (auto frame = reassembler_.add(r.frame())) onSonarFrame(device, *frame, stamp_ns, out);
       break;
     }
+    case DeviceId::kArisFrames: onArisFramePart(bytes, stamp_ns, out); break;
+    case DeviceId::kArisCommands: onArisCommand(bytes); break;
     case DeviceId::kBackseat:
       backseat_.feed(bytes);
       while (auto sentence = backseat_.next()) {
@@ -240,20 +255,59 @@ void DeviceFeed::onDvlAccepted(std::int64_t stamp_ns, FeedOutput& out) {
   if (T) addOdometry(stamp_ns, *T, out);
 }
 
-void DeviceFeed::onSonarFrame(const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out) {
+void DeviceFeed::onArisFramePart(std::span<const std::uint8_t> datagram, std::int64_t stamp_ns, FeedOutput& out) {
+  sonar::ArisPartResult r = aris_assembler_.add(datagram, 1e-9 * static_cast<double>(stamp_ns));
+  if (r.refusal) {
+    reject(DeviceId::kArisFrames, r.refusal_detail);
+    return;
+  }
+  ++counter(DeviceId::kArisFrames).messages;
+  if (r.ack && r.ack_port > 0 && r.ack_port <= 65535) {
+    out.aris_acks.push_back({r.ack_port, sonar::encodeArisFramePartAck(*r.ack)});
+  }
+  if (!r.frame) return;
+  const std::uint32_t cookie = r.frame->meta.settings_cookie;
+  aris_cookie_received_ = cookie;
+  if (aris_cookie_sent_ != 0 && cookie != aris_cookie_sent_) {
+    ++aris_frames_other_settings_;
+    ++scans_dropped_;
+    last_drop_reason_ = "frame " + std::to_string(r.frame->frame.frame_index) + " made with settings " +
+                        std::to_string(cookie) + ", not the " + std::to_string(aris_cookie_sent_) + " sent";
+    return;
+  }
+  onSonarFrame(DeviceId::kArisFrames, r.frame->frame, stamp_ns, out);
+}
+
+void DeviceFeed::onArisCommand(std::span<const std::uint8_t> bytes) {
+  // One record is one whole message as sent; a fresh decoder reads it.
+  sonar::ArisCommandDecoder decoder;
+  for (const sonar::ArisDecodedCommand& d : decoder.feed(bytes)) {
+    if (!d.command) {
+      reject(DeviceId::kArisCommands, d.refusal_detail);
+      continue;
+    }
+    ++counter(DeviceId::kArisCommands).messages;
+    if (const auto* acoustic = std::get_if<sonar::ArisAcousticSettings>(&*d.command)) {
+      aris_cookie_sent_ = acoustic->cookie;
+    }
+  }
+  if (decoder.buffered() > 0) reject(DeviceId::kArisCommands, "a record ends inside a command");
+}
+
+void DeviceFeed::onSonarFrame(DeviceId device, const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out) {
   auto drop = [&](const std::string& why) {
     ++scans_dropped_;
     last_drop_reason_ = why;
   };
   if (frame.n_beams != config_.n_beams) {
-    reject(DeviceId::kSonar, "frame " + std::to_string(frame.frame_index) + " has " + std::to_string(frame.n_beams) +
-                                 " beams, the mapping's fan " + std::to_string(config_.n_beams));
+    reject(device, "frame " + std::to_string(frame.frame_index) + " has " + std::to_string(frame.n_beams) +
+                       " beams, the mapping's fan " + std::to_string(config_.n_beams));
     drop("beam count");
     return;
   }
   auto ranges = sonar::extractRanges(frame, config_.range_extraction);
   if (!ranges) {
-    reject(DeviceId::kSonar, "frame " + std::to_string(frame.frame_index) + ": " + ranges.error().message);
+    reject(device, "frame " + std::to_string(frame.frame_index) + ": " + ranges.error().message);
     drop("range extraction: " + ranges.error().message);
     return;
   }

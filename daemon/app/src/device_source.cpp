@@ -6,6 +6,7 @@
 #include "vog/io/serial.hpp"
 #include "vog/io/tcp_client.hpp"
 #include "vog/io/udp.hpp"
+#include "vog/sonar/aris_command.hpp"
 
 #include <asio/executor_work_guard.hpp>
 #include <asio/io_context.hpp>
@@ -45,8 +46,11 @@ api::DeviceState stateOf(const io::DeviceHealth& h, bool data_stale) {
 }  // namespace
 
 struct DeviceSource::Impl {
-  Impl(const DevicesSection& c, DeviceFeed f, const backseat::LocalTangentPlane& ltp)
-      : config(c), feed(std::move(f)), follower(followerConfig(c), ltp) {}
+  Impl(const DevicesSection& c, DeviceFeed f, const backseat::LocalTangentPlane& ltp,
+       std::optional<sonar::ArisDerivedSettings> aris)
+      : config(c), feed(std::move(f)), follower(followerConfig(c), ltp), aris_settings(std::move(aris)) {
+    aris_address = c.aris.address;
+  }
 
   static WaypointFollowerConfig followerConfig(const DevicesSection& c) {
     WaypointFollowerConfig f = c.follower;
@@ -84,9 +88,88 @@ struct DeviceSource::Impl {
       auto T = feed.odometryPoseAt(output.vehicle_navigation->stamp_ns);
       follower.onNavigation(*output.vehicle_navigation, T ? std::optional<geometry::Pose3>(*T) : std::nullopt);
     }
+    if (sonar && !aris_address.empty()) {
+      for (const ArisAckOut& ack : output.aris_acks) {
+        (void)sonar->sendTo(aris_address, static_cast<std::uint16_t>(ack.port), ack.datagram);
+      }
+    }
     for (const slam::ScanInput& scan : output.scans) {
       if (!sink->onScan(scan, std::nullopt)) return;
     }
+  }
+
+  // ---- ARIS: the command channel ----
+
+  bool arisKind() const { return config.sonar_kind == SonarKind::kAris; }
+
+  void openArisCommands() {
+    io::TcpClientConfig c;
+    c.address = aris_address;
+    c.port = config.aris.command_port;
+    c.reconnect = config.aris.reconnect;
+    aris_commands = std::make_unique<io::TcpClient>(
+        io, c, stampClock(), [](std::span<const std::uint8_t>, std::int64_t) {},  // the sonar sends nothing here
+        [this](const io::DeviceHealth& h) {
+          if (h.state == io::LinkState::kConnected) sendArisSetup();
+        });
+  }
+
+  // Sends one command; every command but PING goes to the raw log and the feed (the cookie).
+  void sendAris(const sonar::ArisCommand& command) {
+    const std::vector<std::uint8_t> bytes = sonar::encodeArisCommand(command);
+    if (Status s = aris_commands->write(bytes); !s.ok()) return;  // the link reconnects and sends it all again
+    if (!std::holds_alternative<sonar::ArisPing>(command)) onChunk(DeviceId::kArisCommands, now(), bytes);
+  }
+
+  // On every (re)connection: the date, the stream settings, the acoustic settings, the receiver.
+  void sendArisSetup() {
+    sonar::ArisDerivedSettings settings = *aris_settings;
+    aris_cookies.stamp(settings.acoustic);
+    const std::string& receiver =
+        config.aris.receiver_address.empty() ? config.sonar.bind_address : config.aris.receiver_address;
+    const sonar::ArisSetFrameStreamReceiver to{receiver, sonar->localPort()};
+    const auto unix_s =
+        std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    for (const sonar::ArisCommand& c : sonar::arisConnectCommands(settings, config.aris.stream, to, unix_s)) {
+      sendAris(c);
+    }
+    aris_settings_sent_ns = now();
+    aris_ping_ns = aris_settings_sent_ns;
+  }
+
+  void arisTick(std::int64_t t) {
+    if (!aris_commands || aris_commands->health().state != io::LinkState::kConnected) return;
+    if (1e-9 * static_cast<double>(t - aris_ping_ns) < config.aris.keepalive_period_s) return;
+    aris_ping_ns = t;
+    sendAris(sonar::ArisPing{});
+  }
+
+  // The sonar's row in health: the frame stream and the command channel together.
+  std::string arisDetail(std::int64_t t, api::DeviceState& state) const {
+    std::string d = "ARIS " + std::string(sonar::arisModelLimits(config.aris.sonar.model).name) + " at " +
+                    (aris_address.empty() ? "(waiting for its beacon)" : aris_address);
+    if (aris_commands == nullptr || aris_commands->health().state != io::LinkState::kConnected) {
+      d += ", command channel " +
+           (aris_commands == nullptr ? std::string("not open") : "down: " + aris_commands->health().reason);
+      state = api::DeviceState::kDisconnected;
+      return d;
+    }
+    const std::uint32_t sent = feed.arisCookieSent();
+    const std::uint32_t got = feed.arisCookieReceived();
+    if (sent != 0 && got == sent) {
+      d += ", settings " + std::to_string(sent) + " applied";
+    } else if (sent != 0) {
+      const double waited_s = 1e-9 * static_cast<double>(t - aris_settings_sent_ns);
+      d += ", settings " + std::to_string(sent) + " sent, frames carry " + std::to_string(got);
+      if (waited_s > config.aris.settings_timeout_s) {
+        d += ": the sonar has not taken the acoustic settings sent";
+        state = api::DeviceState::kDegraded;
+      }
+    }
+    const sonar::ArisFrameAssemblerStats& a = feed.arisFrames();
+    d += "; " + std::to_string(a.frames_completed) + " frames, " + std::to_string(a.frames_dropped_incomplete) +
+         " incomplete, " + std::to_string(feed.arisFramesOtherSettings()) + " with other settings";
+    return d;
   }
 
   void openDevices() {
@@ -110,7 +193,9 @@ struct DeviceSource::Impl {
           });
     }
     if (config.sonar_enabled) {
-      sonar = std::make_unique<io::UdpReceiver>(io, config.sonar, stampClock(), bytesTo(DeviceId::kSonar));
+      sonar = std::make_unique<io::UdpReceiver>(io, config.sonar, stampClock(),
+                                                bytesTo(arisKind() ? DeviceId::kArisFrames : DeviceId::kSonar));
+      if (arisKind() && !aris_address.empty()) openArisCommands();
     }
     if (config.backseat_enabled) {
       backseat = std::make_unique<io::TcpClient>(io, config.backseat, stampClock(), bytesTo(DeviceId::kBackseat));
@@ -129,6 +214,9 @@ struct DeviceSource::Impl {
     }
     if (sonar) {
       if (Status s = sonar->start(); !s.ok()) return Error{"devices.sonar: " + s.error().message};
+    }
+    if (aris_commands) {
+      if (Status s = aris_commands->start(); !s.ok()) return Error{"devices.sonar.aris: " + s.error().message};
     }
     if (backseat) {
       if (Status s = backseat->start(); !s.ok()) return Error{"devices.backseat: " + s.error().message};
@@ -156,6 +244,7 @@ struct DeviceSource::Impl {
     if (backseat && backseat->health().state == io::LinkState::kConnected) {
       for (const std::string& s : out) (void)backseat->write(bytesOf(s));
     }
+    arisTick(t);
     if (depth && depth->health().state == io::LinkState::kConnected) {
       const std::int64_t last = feed.counters(DeviceId::kDepth).last_stamp_ns;
       if (t - std::max(last, depth_asked_ns) > kDepthRestartNs) startDepthStream();
@@ -189,9 +278,24 @@ struct DeviceSource::Impl {
     add(DeviceId::kDvl, dvl ? &dvl->health() : nullptr, n.dvl_timeout_s, "");
     add(DeviceId::kDepth, depth ? &depth->health() : nullptr, n.depth_timeout_s, "");
     add(DeviceId::kImu, imu ? &imu->health() : nullptr, n.imu_timeout_s, "");
-    add(DeviceId::kSonar, sonar ? &sonar->health() : nullptr, 2.0,
-        std::to_string(feed.scans()) + " scans, " + std::to_string(feed.scansDropped()) + " dropped" +
-            (feed.scansDropped() > 0 ? " (last: " + feed.lastDropReason() + ")" : ""));
+    const std::string scans = std::to_string(feed.scans()) + " scans, " + std::to_string(feed.scansDropped()) +
+                              " dropped" + (feed.scansDropped() > 0 ? " (last: " + feed.lastDropReason() + ")" : "");
+    if (arisKind()) {
+      api::DeviceState state = api::DeviceState::kOk;
+      const std::string detail = arisDetail(t, state);
+      add(DeviceId::kArisFrames, sonar ? &sonar->health() : nullptr, 2.0, detail + "; " + scans);
+      if (!out.empty()) {
+        api::DeviceHealth& row = out.back();
+        row.name = "sonar";
+        // The command channel down outranks the stream; settings not taken degrade a working one.
+        if (state == api::DeviceState::kDisconnected ||
+            (state == api::DeviceState::kDegraded && row.state == api::DeviceState::kOk)) {
+          row.state = state;
+        }
+      }
+    } else {
+      add(DeviceId::kSonar, sonar ? &sonar->health() : nullptr, 2.0, scans);
+    }
     if (backseat) {
       const FollowerStats& f = follower.stats();
       std::string detail = std::to_string(f.commands_sent) + " waypoints sent, " + std::to_string(f.arrived) +
@@ -243,6 +347,13 @@ struct DeviceSource::Impl {
   std::unique_ptr<io::UdpReceiver> sonar;
   std::unique_ptr<io::TcpClient> backseat;
   std::int64_t depth_asked_ns = 0;
+  // ARIS (kind aris): the command channel, the settings it sends and their cookies.
+  std::unique_ptr<io::TcpClient> aris_commands;
+  std::optional<sonar::ArisDerivedSettings> aris_settings;  // derived from the config at create()
+  sonar::ArisSettingsCookies aris_cookies;
+  std::string aris_address;  // configured, or the beacon's sender
+  std::int64_t aris_settings_sent_ns = 0;
+  std::int64_t aris_ping_ns = 0;
 
   mutable std::mutex mutex;
   std::optional<std::vector<SourceWaypoint>> pending;  // guarded by mutex
@@ -260,7 +371,12 @@ Result<std::unique_ptr<DeviceSource>> DeviceSource::create(const DevicesSection&
   if (!feed) return feed.error();
   auto ltp = backseat::LocalTangentPlane::create(config.feed.origin);
   if (!ltp) return Error{"devices.backseat.origin: " + ltp.error().message};
-  auto impl = std::make_unique<Impl>(config, std::move(feed).value(), *ltp);
+  std::optional<sonar::ArisDerivedSettings> aris;
+  if (config.sonar_enabled && config.sonar_kind == SonarKind::kAris) {
+    if (Status s = config.aris.validate(config.sonar.bind_address); !s.ok()) return s.error();
+    aris = sonar::deriveArisAcousticSettings(config.aris.sonar).value();
+  }
+  auto impl = std::make_unique<Impl>(config, std::move(feed).value(), *ltp, std::move(aris));
   impl->openDevices();
   return std::unique_ptr<DeviceSource>(new DeviceSource(std::move(impl)));
 }
@@ -294,6 +410,7 @@ void DeviceSource::stop() {
     }
     if (d.imu) d.imu->stop();
     if (d.sonar) d.sonar->stop();
+    if (d.aris_commands) d.aris_commands->stop();
     if (d.backseat) d.backseat->stop();
     d.io.stop();
   });

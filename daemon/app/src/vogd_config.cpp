@@ -155,6 +155,61 @@ void readNav(ConfigMap m, nav::DeadReckoningConfig& c) {
   m.finish();
 }
 
+void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& frames) {
+  m.text("address", a.address);
+  std::uint64_t serial = a.serial_number;
+  m.unsignedInteger("serial_number", serial, 0, std::numeric_limits<std::uint32_t>::max());
+  a.serial_number = static_cast<std::uint32_t>(serial);
+  readPort(m, "command_port", a.command_port, 1);
+  readPort(m, "beacon_port", a.beacon_port, 0);
+  m.text("receiver_address", a.receiver_address);
+  sonar::ArisSonarConfig& c = a.sonar;
+  std::string model = c.model == sonar::ArisSystemType::k3000   ? "3000"
+                      : c.model == sonar::ArisSystemType::k1200 ? "1200"
+                                                                : "1800";
+  m.choice("model", model, {"1200", "1800", "3000"});
+  c.model = model == "3000"   ? sonar::ArisSystemType::k3000
+            : model == "1200" ? sonar::ArisSystemType::k1200
+                              : sonar::ArisSystemType::k1800;
+  m.number("window_start_m", c.window_start_m, 0.0, 100.0);
+  m.number("window_end_m", c.window_end_m, 0.0, 100.0);
+  m.number("sound_speed_mps", c.sound_speed_mps, 1400.0, 1600.0);
+  std::uint64_t ping_mode = c.ping_mode;
+  m.unsignedInteger("ping_mode", ping_mode, 1, 9);
+  c.ping_mode = static_cast<std::uint32_t>(ping_mode);
+  m.number("frame_rate_hz", c.frame_rate_hz, sonar::kArisFrameRateMinHz, sonar::kArisFrameRateMaxHz);
+  std::string salinity = c.salinity == sonar::ArisSalinity::kSaltwater  ? "saltwater"
+                         : c.salinity == sonar::ArisSalinity::kBrackish ? "brackish"
+                                                                        : "fresh";
+  m.choice("salinity", salinity, {"fresh", "brackish", "saltwater"});
+  c.salinity = salinity == "saltwater"  ? sonar::ArisSalinity::kSaltwater
+               : salinity == "brackish" ? sonar::ArisSalinity::kBrackish
+                                        : sonar::ArisSalinity::kFresh;
+  std::string frequency = c.frequency == sonar::ArisFrequency::kLow ? "low" : "high";
+  m.choice("frequency", frequency, {"low", "high"});
+  c.frequency = frequency == "low" ? sonar::ArisFrequency::kLow : sonar::ArisFrequency::kHigh;
+  std::uint64_t samples = c.samples_per_beam;
+  m.unsignedInteger("samples_per_beam", samples, 0, sonar::kArisSamplesPerBeamMax);
+  c.samples_per_beam = static_cast<std::uint32_t>(samples);
+  m.number("range_resolution_m", c.range_resolution_m, 0.0, 1.0);
+  m.number("receiver_gain_db", c.receiver_gain_db, 0.0, sonar::kArisReceiverGainMaxDb);
+  std::string mitigation = a.stream.packet_loss_mitigation == sonar::ArisPacketLossMitigation::kDropPartialFrames
+                               ? "drop_partial_frames"
+                               : "pessimistic_retry";
+  m.choice("packet_loss_mitigation", mitigation, {"pessimistic_retry", "drop_partial_frames"});
+  a.stream.packet_loss_mitigation = mitigation == "drop_partial_frames"
+                                        ? sonar::ArisPacketLossMitigation::kDropPartialFrames
+                                        : sonar::ArisPacketLossMitigation::kPessimisticRetry;
+  m.number("keepalive_period_s", a.keepalive_period_s, 0.1, 10.0);
+  m.number("settings_timeout_s", a.settings_timeout_s, 0.5, 60.0);
+  m.number("max_frame_age_s", frames.max_frame_age_s, 0.1, 60.0);
+  std::uint64_t in_flight = frames.max_frames_in_flight;
+  m.unsignedInteger("max_frames_in_flight", in_flight, 1, 64);
+  frames.max_frames_in_flight = static_cast<std::size_t>(in_flight);
+  readReconnect(m.map("reconnect"), a.reconnect);
+  m.finish();
+}
+
 void readDevices(ConfigMap m, DevicesSection& d) {
   DeviceFeedConfig& f = d.feed;
   m.number("time_scale", d.time_scale, 0.01, 1000.0);
@@ -189,8 +244,12 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   imu.finish();
   ConfigMap sonar = m.map("sonar");
   sonar.boolean("enabled", d.sonar_enabled);
+  std::string kind = d.sonar_kind == SonarKind::kAris ? "aris" : "fragments";
+  sonar.choice("kind", kind, {"fragments", "aris"});
+  d.sonar_kind = kind == "aris" ? SonarKind::kAris : SonarKind::kFragments;
   sonar.text("bind_address", d.sonar.bind_address);
   readPort(sonar, "port", d.sonar.port, 0);
+  readAris(sonar.map("aris"), d.aris, f.aris_frames);
   ConfigMap ex = sonar.map("range_extraction");
   sonar::RangeExtractionConfig& r = f.range_extraction;
   ex.boolean("median_denoise", r.median_denoise);
@@ -437,6 +496,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
     if (d.depth_enabled) checks.push_back(d.depth.validate("devices.depth"));
     if (d.imu_enabled) checks.push_back(d.imu.validate("devices.imu"));
     if (d.sonar_enabled) checks.push_back(d.sonar.validate("devices.sonar"));
+    if (d.sonar_enabled && d.sonar_kind == SonarKind::kAris) checks.push_back(d.aris.validate(d.sonar.bind_address));
     if (d.backseat_enabled) {
       checks.push_back(d.backseat.validate("devices.backseat"));
       checks.push_back(d.follower.validate());
@@ -511,6 +571,39 @@ Result<VogdConfig> loadVogdConfig(const std::filesystem::path& file) {
   std::stringstream text;
   text << in.rdbuf();
   return parseVogdConfig(text.str(), file.filename().string(), file.parent_path());
+}
+
+Status ArisLinkConfig::validate(const std::string& bind_address) const {
+  const std::string prefix = "devices.sonar.aris.";
+  auto ipv4 = [](const std::string& text) {
+    std::error_code ec;
+    const asio::ip::address a = asio::ip::make_address(text, ec);
+    return !ec && a.is_v4();
+  };
+  if (!address.empty() && !ipv4(address)) {
+    return Error{prefix + "address: '" + address + "' is not a numeric IPv4 address (empty: discovered)"};
+  }
+  if (address.empty() && beacon_port == 0) {
+    return Error{prefix + "address: empty and beacon_port 0: give the sonar's address or listen for its beacon"};
+  }
+  const std::string& receiver = receiver_address.empty() ? bind_address : receiver_address;
+  const std::string receiver_key =
+      receiver_address.empty() ? "devices.sonar.bind_address" : prefix + "receiver_address";
+  if (!ipv4(receiver) || receiver == "0.0.0.0") {
+    return Error{receiver_key + ": '" + receiver + "' is not an IPv4 address the sonar can send frames to" +
+                 (receiver_address.empty() ? " (set devices.sonar.aris.receiver_address)" : "")};
+  }
+  if (Status s = sonar.validate(); !s.ok()) return Error{prefix + s.error().message};
+  if (auto derived = sonar::deriveArisAcousticSettings(sonar); !derived) {
+    return Error{prefix + derived.error().message};
+  }
+  if (!(keepalive_period_s >= 0.1 && keepalive_period_s <= 10.0)) {
+    return Error{prefix + "keepalive_period_s: " + std::to_string(keepalive_period_s) + ", must be in [0.1, 10]"};
+  }
+  if (!(settings_timeout_s >= 0.5 && settings_timeout_s <= 60.0)) {
+    return Error{prefix + "settings_timeout_s: " + std::to_string(settings_timeout_s) + ", must be in [0.5, 60]"};
+  }
+  return reconnect.validate(prefix + "reconnect");
 }
 
 }  // namespace vog::app

@@ -37,6 +37,23 @@ class UdpReceiver::Impl final : public detail::Supervisor {
         buffer_(config_.max_datagram_bytes + 1) {}
 
   const UdpReceiverConfig& config() const { return config_; }
+  std::string senderAddress() const { return sender_.address().to_string(); }
+
+  Status sendTo(const std::string& address, std::uint16_t port, std::span<const std::uint8_t> datagram) {
+    const std::string where = "udp send to " + address + ":" + std::to_string(port);
+    std::error_code ec;
+    const asio::ip::address ip = asio::ip::make_address(address, ec);
+    if (ec) return Error{where + ": not a numeric IP address"};
+    if (!socket_.is_open()) return Error{where + ": the socket is not bound"};
+    const std::size_t n =
+        socket_.send_to(asio::buffer(datagram.data(), datagram.size()), asio::ip::udp::endpoint(ip, port), 0, ec);
+    if (ec || n != datagram.size()) {
+      noteError(where + ": " + (ec ? ec.message() : "short send"));
+      return Error{where + ": " + (ec ? ec.message() : "short send")};
+    }
+    noteTx(n, 1);
+    return Status::success();
+  }
   std::uint16_t localPort() const {
     std::error_code ec;
     const auto ep = socket_.local_endpoint(ec);
@@ -110,6 +127,10 @@ Status UdpReceiver::start() {
 
 void UdpReceiver::stop() { impl_->stop(); }
 std::uint16_t UdpReceiver::localPort() const { return impl_->localPort(); }
+std::string UdpReceiver::senderAddress() const { return impl_->senderAddress(); }
+Status UdpReceiver::sendTo(const std::string& address, std::uint16_t port, std::span<const std::uint8_t> datagram) {
+  return impl_->sendTo(address, port, datagram);
+}
 const DeviceHealth& UdpReceiver::health() const { return impl_->health(); }
 
 struct UdpSender::Socket {

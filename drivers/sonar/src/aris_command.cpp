@@ -678,4 +678,15 @@ void ArisSettingsCookies::stamp(ArisAcousticSettings& settings) {
   last_ = settings;
 }
 
+std::vector<ArisCommand> arisConnectCommands(const ArisDerivedSettings& settings,
+                                             const ArisSetFrameStreamSettings& stream,
+                                             const ArisSetFrameStreamReceiver& receiver, std::int64_t unix_time_s) {
+  return {ArisSetDateTime{arisDateTimeText(unix_time_s)},
+          stream,
+          settings.salinity,
+          settings.acoustic,
+          settings.focus,
+          receiver};
+}
+
 }  // namespace vog::sonar

@@ -150,6 +150,28 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(da.feed.origin.longitude_deg, db.feed.origin.longitude_deg);
   EXPECT_EQ(da.feed.align_to_vehicle, db.feed.align_to_vehicle);
   EXPECT_EQ(da.feed.backseat_max_extrapolation_s, db.feed.backseat_max_extrapolation_s);
+  EXPECT_EQ(da.sonar_kind, db.sonar_kind);
+  EXPECT_EQ(da.aris.address, db.aris.address);
+  EXPECT_EQ(da.aris.serial_number, db.aris.serial_number);
+  EXPECT_EQ(da.aris.command_port, db.aris.command_port);
+  EXPECT_EQ(da.aris.beacon_port, db.aris.beacon_port);
+  EXPECT_EQ(da.aris.receiver_address, db.aris.receiver_address);
+  EXPECT_EQ(da.aris.sonar.model, db.aris.sonar.model);
+  EXPECT_EQ(da.aris.sonar.window_start_m, db.aris.sonar.window_start_m);
+  EXPECT_EQ(da.aris.sonar.window_end_m, db.aris.sonar.window_end_m);
+  EXPECT_EQ(da.aris.sonar.sound_speed_mps, db.aris.sonar.sound_speed_mps);
+  EXPECT_EQ(da.aris.sonar.ping_mode, db.aris.sonar.ping_mode);
+  EXPECT_EQ(da.aris.sonar.frame_rate_hz, db.aris.sonar.frame_rate_hz);
+  EXPECT_EQ(da.aris.sonar.salinity, db.aris.sonar.salinity);
+  EXPECT_EQ(da.aris.sonar.frequency, db.aris.sonar.frequency);
+  EXPECT_EQ(da.aris.sonar.samples_per_beam, db.aris.sonar.samples_per_beam);
+  EXPECT_EQ(da.aris.sonar.range_resolution_m, db.aris.sonar.range_resolution_m);
+  EXPECT_EQ(da.aris.sonar.receiver_gain_db, db.aris.sonar.receiver_gain_db);
+  EXPECT_EQ(da.aris.stream, db.aris.stream);
+  EXPECT_EQ(da.aris.keepalive_period_s, db.aris.keepalive_period_s);
+  EXPECT_EQ(da.aris.settings_timeout_s, db.aris.settings_timeout_s);
+  EXPECT_EQ(da.feed.aris_frames.max_frame_age_s, db.feed.aris_frames.max_frame_age_s);
+  EXPECT_EQ(da.feed.aris_frames.max_frames_in_flight, db.feed.aris_frames.max_frames_in_flight);
   EXPECT_EQ(da.follower.arrival_tolerance_m, db.follower.arrival_tolerance_m);
   EXPECT_NEAR(da.follower.arrival_tolerance_rad, db.follower.arrival_tolerance_rad, 1e-12);
   EXPECT_EQ(da.follower.arrival_max_speed_mps, db.follower.arrival_max_speed_mps);
@@ -251,6 +273,35 @@ TEST(VogdConfig, CrossFieldRulesAreChecked) {
 }
 
 // The operator secret is refused as ssh refuses a private key, at the key's line, naming the file.
+TEST(VogdConfig, ArisSettingsAreCheckedAgainstTheModel) {
+  const std::string devices =
+      "source: devices\ndevices:\n  dvl: {device: /dev/null}\n  depth: {device: /dev/null}\n"
+      "  imu: {can_interface: can0}\n  backseat: {address: 127.0.0.1}\n";
+  const std::string aris = devices + "  sonar:\n    kind: aris\n    bind_address: 127.0.0.1\n    aris:\n";
+  auto ok = parse(aris + "      address: 10.0.0.5\n");
+  ASSERT_TRUE(ok.ok()) << ok.error().message;
+  EXPECT_EQ(ok->devices.sonar_kind, SonarKind::kAris);
+  EXPECT_NE(errorOf(aris + "      address: sonar.local\n")
+                .find("devices.sonar.aris.address: 'sonar.local' is not a numeric IPv4"),
+            std::string::npos);
+  EXPECT_NE(errorOf(aris + "      beacon_port: 0\n").find("give the sonar's address or listen for its beacon"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(aris + "      window_end_m: 60\n").find("devices.sonar.aris.window_end_m: 60, outside the ARIS 1800's"),
+      std::string::npos);
+  EXPECT_NE(errorOf(aris + "      ping_mode: 6\n").find("devices.sonar.aris.ping_mode: 6"), std::string::npos);
+  EXPECT_NE(errorOf(aris + "      salinity: sea\n").find("devices.sonar.aris.salinity: must be one of"),
+            std::string::npos);
+  EXPECT_NE(errorOf(aris + "      windows_start_m: 1\n").find("devices.sonar.aris.windows_start_m: unknown key"),
+            std::string::npos);
+  // Frames must be sent somewhere the sonar can reach.
+  EXPECT_NE(errorOf(devices + "  sonar: {kind: aris, bind_address: 0.0.0.0}\n")
+                .find("set devices.sonar.aris.receiver_address"),
+            std::string::npos);
+  EXPECT_TRUE(
+      parse(devices + "  sonar: {kind: aris, bind_address: 0.0.0.0, aris: {receiver_address: 192.168.1.20}}\n").ok());
+}
+
 TEST(VogdConfig, SecretFileIsCheckedWhenRead) {
   test::TempDir dir("vog-config");
   const auto withSecret = [](const std::filesystem::path& f) {

@@ -11,8 +11,10 @@
 #include "vog/depth/digiquartz.hpp"
 #include "vog/dvl/pd0.hpp"
 #include "vog/imu/imu_can.hpp"
-#include "vog/vehicle/sim_wire.hpp"
+#include "vog/mock/aris_frame_sender.hpp"
+#include "vog/sonar/aris_command.hpp"
 #include "vog/sonar/sonar_udp.hpp"
+#include "vog/vehicle/sim_wire.hpp"
 
 #include <gtest/gtest.h>
 
@@ -47,8 +49,10 @@ sonar::SonarFrame frameAt(std::int64_t t_ns, std::uint32_t index, int n_beams) {
   f.frame_index = index;
   f.n_beams = n_beams;
   f.n_samples = 512;
-  f.window_start_m = 0.5;
-  f.window_length_m = 10.24;  // 2 cm samples
+  // Whole microseconds at 1500 m/s (0.75 mm each), as an ARIS header carries them: a delay of 670 us
+  // and a sample period of 27 us (2.025 cm samples).
+  f.window_start_m = 0.5025;
+  f.window_length_m = 512 * 0.02025;
   f.samples.assign(static_cast<std::size_t>(f.n_beams * f.n_samples), 10);
   const int s0 = static_cast<int>((kRange - f.window_start_m) / f.sampleLength_m());
   for (int s = s0; s < s0 + 4; ++s)
@@ -56,11 +60,24 @@ sonar::SonarFrame frameAt(std::int64_t t_ns, std::uint32_t index, int n_beams) {
   return f;
 }
 
+enum class SonarWire { kFragments, kAris };
+constexpr std::uint32_t kArisCookie = 7;
+constexpr std::int32_t kArisAckPort = 56889;
+
 // 20 s of the vehicle's devices, in reception order: each stamped a few ms after it was taken
 // (IMU 0, depth 1, DVL 2, backseat 3, sonar 5 ms). Navigation sentences start at 1 s, so frames 1-5
 // come before them; frame 50 has 48 beams; 64 garbage bytes precede the DVL at 8 s.
-std::vector<Chunk> recording() {
+// kAris: the frames as an ARIS sends them (FramePart datagrams in the sonar's order), after the
+// SET_ACOUSTICS with cookie 7 that vogd logged at 0; frames 10-12 still carry cookie 6.
+std::vector<Chunk> recording(SonarWire sonar_wire = SonarWire::kFragments) {
   std::vector<Chunk> out;
+  mock::ArisFrameSender aris(
+      {.mode = sonar::ArisPacketLossMitigation::kDropPartialFrames, .part_bytes = 8192, .ack_port = kArisAckPort});
+  if (sonar_wire == SonarWire::kAris) {
+    sonar::ArisAcousticSettings settings = sonar::deriveArisAcousticSettings({}).value().acoustic;
+    settings.cookie = kArisCookie;
+    out.push_back({DeviceId::kArisCommands, 0, sonar::encodeArisCommand(settings)});
+  }
   vehicle::SimWireConfig wire;
   const auto ltp = backseat::LocalTangentPlane::create({42.0, -71.0}).value();
   std::uint32_t imu_seq = 0, ensemble = 0, frame = 0;
@@ -96,8 +113,17 @@ std::vector<Chunk> recording() {
     if (t % (200 * kMs) == 100 * kMs) {
       ++frame;
       const sonar::SonarFrame f = frameAt(t, frame, frame == 50 ? 48 : 96);
-      const auto datagrams = sonar::encodeSonarDatagrams(f);
-      for (const auto& datagram : datagrams.value()) out.push_back({DeviceId::kSonar, t + 5 * kMs, datagram});
+      if (sonar_wire == SonarWire::kAris) {
+        const sonar::ArisHeaderOptions header{.ping_mode = f.n_beams == 48 ? 1u : 3u,
+                                              .reordered_samples = false,
+                                              .settings_cookie = frame >= 10 && frame <= 12 ? 6 : kArisCookie};
+        const auto datagrams = aris.send(f, header, 1e-9 * static_cast<double>(t));
+        if (!datagrams) throw std::runtime_error(datagrams.error().message);
+        for (const auto& datagram : *datagrams) out.push_back({DeviceId::kArisFrames, t + 5 * kMs, datagram});
+      } else {
+        const auto datagrams = sonar::encodeSonarDatagrams(f);
+        for (const auto& datagram : datagrams.value()) out.push_back({DeviceId::kSonar, t + 5 * kMs, datagram});
+      }
     }
   }
   return out;
@@ -106,6 +132,7 @@ std::vector<Chunk> recording() {
 struct FeedRun {
   std::vector<OdometrySample> odometry;
   std::vector<slam::ScanInput> scans;
+  std::vector<ArisAckOut> aris_acks;
 };
 
 FeedRun feedAll(DeviceFeed& feed, const std::vector<Chunk>& chunks) {
@@ -116,6 +143,7 @@ FeedRun feedAll(DeviceFeed& feed, const std::vector<Chunk>& chunks) {
     feed.feed(c.device, c.stamp_ns, c.bytes, out);
     run.odometry.insert(run.odometry.end(), out.odometry.begin(), out.odometry.end());
     run.scans.insert(run.scans.end(), out.scans.begin(), out.scans.end());
+    run.aris_acks.insert(run.aris_acks.end(), out.aris_acks.begin(), out.aris_acks.end());
   }
   return run;
 }
@@ -180,6 +208,65 @@ TEST(DeviceFeed, TheSameChunksGiveTheSameScansBitForBit) {
               0);
     EXPECT_EQ(ra.scans[i].scan.range_m, rb.scans[i].scan.range_m);
   }
+}
+
+// The same pings over the ARIS frame stream: each datagram acknowledged to its ack port, the frames
+// reordered from the sonar's order, and the same scans as over the fragment format at the same
+// stamps and poses (the window in whole microseconds, as a header holds it). Frames made with settings other than the
+// last sent are not mapped.
+TEST(DeviceFeed, ArisFrameStreamGivesTheSameScansAndOnlyWithTheSettingsSent) {
+  auto fragments = DeviceFeed::create(feedConfig()).value();
+  const FeedRun reference = feedAll(fragments, recording(SonarWire::kFragments));
+  const std::vector<Chunk> chunks = recording(SonarWire::kAris);
+  auto feed = DeviceFeed::create(feedConfig()).value();
+  const FeedRun run = feedAll(feed, chunks);
+
+  const auto parts =
+      std::count_if(chunks.begin(), chunks.end(), [](const Chunk& c) { return c.device == DeviceId::kArisFrames; });
+  ASSERT_EQ(run.aris_acks.size(), static_cast<std::size_t>(parts));
+  for (const ArisAckOut& a : run.aris_acks) {
+    EXPECT_EQ(a.port, kArisAckPort);
+    EXPECT_TRUE(sonar::decodeArisFramePartAck(a.datagram).ok());
+  }
+  EXPECT_EQ(feed.arisCookieSent(), kArisCookie);
+  EXPECT_EQ(feed.arisCookieReceived(), kArisCookie);
+  EXPECT_EQ(feed.arisFrames().frames_completed, 100u);
+  EXPECT_EQ(feed.arisFramesOtherSettings(), 3u);
+  EXPECT_EQ(feed.lastDropReason(), "beam count");  // frame 50, after frames 10-12
+  EXPECT_EQ(feed.counters(DeviceId::kArisCommands).messages, 1u);
+
+  ASSERT_EQ(run.scans.size(), 91u);  // 94 as over fragments, less frames 10-12
+  std::size_t j = 0;
+  for (const slam::ScanInput& s : run.scans) {
+    while (j < reference.scans.size() && reference.scans[j].scan.stamp_ns < s.scan.stamp_ns) ++j;
+    ASSERT_LT(j, reference.scans.size());
+    const slam::ScanInput& r = reference.scans[j];
+    ASSERT_EQ(r.scan.stamp_ns, s.scan.stamp_ns);
+    EXPECT_EQ(std::memcmp(r.T_world_vehicle_odom.data(), s.T_world_vehicle_odom.data(), 16 * sizeof(double)), 0);
+    ASSERT_EQ(s.scan.range_m.size(), r.scan.range_m.size());
+    for (std::size_t b = 0; b < s.scan.range_m.size(); ++b) EXPECT_NEAR(s.scan.range_m[b], r.scan.range_m[b], 1e-5);
+  }
+
+  // The same chunks again: the same scans bit for bit (what --replay relies on).
+  auto again = DeviceFeed::create(feedConfig()).value();
+  const FeedRun rerun = feedAll(again, chunks);
+  ASSERT_EQ(rerun.scans.size(), run.scans.size());
+  for (std::size_t i = 0; i < run.scans.size(); ++i) EXPECT_EQ(rerun.scans[i].scan.range_m, run.scans[i].scan.range_m);
+}
+
+TEST(DeviceFeed, DamagedArisInputIsCountedAndNamed) {
+  auto feed = DeviceFeed::create(feedConfig()).value();
+  FeedOutput out;
+  feed.feed(DeviceId::kArisFrames, 1 * kMs, std::vector<std::uint8_t>(40, 0xFF), out);
+  EXPECT_EQ(feed.counters(DeviceId::kArisFrames).rejected, 1u);
+  EXPECT_NE(feed.counters(DeviceId::kArisFrames).last_error.find("not a FramePart"), std::string::npos)
+      << feed.counters(DeviceId::kArisFrames).last_error;
+  EXPECT_TRUE(out.aris_acks.empty());
+  std::vector<std::uint8_t> cut = sonar::encodeArisCommand(sonar::ArisPing{});
+  cut.pop_back();
+  feed.feed(DeviceId::kArisCommands, 2 * kMs, cut, out);
+  EXPECT_EQ(feed.counters(DeviceId::kArisCommands).rejected, 1u);
+  EXPECT_EQ(feed.arisCookieSent(), 0u);
 }
 
 TEST(DeviceFeed, BackseatNavigationIsInterpolatedToThePing) {

@@ -8,6 +8,8 @@
 //   imu       can_frame records (drivers/imu/README.md)          -> dead reckoning (attitude)
 //   depth     Digiquartz replies                                  -> dead reckoning (z, UNESCO 1983)
 //   sonar     fragment datagrams (sonar_udp.hpp) -> frame -> range extraction -> one scan per ping
+//   aris_frames    ARIS FramePart datagrams (aris_frame_assembler.hpp) -> acks out; frame -> the same
+//   aris_commands  the ARIS commands vogd sent (aris_command.hpp): the acoustic settings' cookie
 //   backseat  $BFNVG / $BFNVR (the vehicle's own navigation), $BFACK (acknowledgements)
 //
 // Navigation. `kDeadReckoning` (default): odometry is this daemon's dead reckoning from the raw
@@ -18,6 +20,10 @@
 // Scans: a ping is stamped at the reception of its last fragment; its pose is the navigation at that
 // stamp. A ping without a pose (navigation not initialised or stale, not yet aligned) is dropped and
 // counted, never mapped with a guessed pose.
+// ARIS: the commands vogd sent are logged and fed like received bytes, so the feed knows the cookie
+// of the last acoustic settings sent; a frame made with other settings (the sonar has not applied
+// them yet, refused them, or obeys another client) is dropped and counted, never mapped. Frames
+// before any SET_ACOUSTICS was logged are mapped (their header describes them).
 //
 // Lifecycle: create() with a validated config; feed() in reception order. Invariants: outputs depend
 // only on the sequence of feed() calls; odometry stamps never decrease.
@@ -34,6 +40,7 @@
 #include "vog/imu/imu_can.hpp"
 #include "vog/nav/dead_reckoning.hpp"
 #include "vog/slam/submap_builder.hpp"
+#include "vog/sonar/aris_frame_assembler.hpp"
 #include "vog/sonar/range_extraction.hpp"
 #include "vog/sonar/sonar_udp.hpp"
 
@@ -53,10 +60,13 @@ enum class DeviceId : std::uint16_t {
   kDepth = 0x0002,
   kImu = 0x0003,
   kSonar = 0x0004,
-  kBackseat = 0x0005
+  kBackseat = 0x0005,
+  kArisFrames = 0x0006,    // FramePart datagrams as received
+  kArisCommands = 0x0007,  // length-prefixed aris.Command messages as sent, one per record
 };
-inline constexpr std::array<DeviceId, 5> kAllDevices = {DeviceId::kDvl, DeviceId::kDepth, DeviceId::kImu,
-                                                        DeviceId::kSonar, DeviceId::kBackseat};
+inline constexpr std::array<DeviceId, 7> kAllDevices = {
+    DeviceId::kDvl,      DeviceId::kDepth,      DeviceId::kImu,         DeviceId::kSonar,
+    DeviceId::kBackseat, DeviceId::kArisFrames, DeviceId::kArisCommands};
 const char* toString(DeviceId device);
 std::optional<DeviceId> deviceIdFromRaw(std::uint16_t raw);
 
@@ -68,6 +78,7 @@ struct DeviceFeedConfig {
   depth::DepthConversionConfig depth;
   imu::ImuCanConfig imu;
   sonar::RangeExtractionConfig range_extraction;
+  sonar::ArisFrameAssemblerConfig aris_frames;
   nav::DeadReckoningConfig nav;
   NavigationSource navigation = NavigationSource::kDeadReckoning;
   bool align_to_vehicle = true;            // dead reckoning starts at the first $BFNVG position
@@ -87,10 +98,17 @@ struct VehicleNavigation {
   int quality = 0;
 };
 
+// A FramePartAck to send to the sonar's ack port.
+struct ArisAckOut {
+  std::int32_t port = 0;
+  std::vector<std::uint8_t> datagram;
+};
+
 struct FeedOutput {
   std::vector<OdometrySample> odometry;
   std::vector<slam::ScanInput> scans;
   std::vector<backseat::AckSentence> acks;
+  std::vector<ArisAckOut> aris_acks;
   std::optional<VehicleNavigation> vehicle_navigation;  // newest in this call
   void clear();
 };
@@ -117,17 +135,24 @@ class DeviceFeed {
   std::uint64_t droppedInput(DeviceId device) const;
   nav::NavSolution deadReckoning(std::int64_t now_ns) const { return dead_reckoning_.solution(now_ns); }
   bool aligned() const { return aligned_; }
+  const sonar::ArisFrameAssemblerStats& arisFrames() const { return aris_assembler_.stats(); }
+  // The cookie of the last SET_ACOUSTICS sent, and of the last frame received (0: none yet).
+  std::uint32_t arisCookieSent() const { return aris_cookie_sent_; }
+  std::uint32_t arisCookieReceived() const { return aris_cookie_received_; }
+  std::uint64_t arisFramesOtherSettings() const { return aris_frames_other_settings_; }
   std::uint64_t scans() const { return scans_; }
   std::uint64_t scansDropped() const { return scans_dropped_; }
   const std::string& lastDropReason() const { return last_drop_reason_; }
 
  private:
   DeviceFeed(const DeviceFeedConfig& config, backseat::LocalTangentPlane ltp)
-      : config_(config), ltp_(ltp), dead_reckoning_(config.nav) {}
+      : config_(config), ltp_(ltp), dead_reckoning_(config.nav), aris_assembler_(config.aris_frames) {}
   DeviceCounters& counter(DeviceId device);
   void reject(DeviceId device, const std::string& why);
   void onDvlAccepted(std::int64_t stamp_ns, FeedOutput& out);
-  void onSonarFrame(const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out);
+  void onSonarFrame(DeviceId device, const sonar::SonarFrame& frame, std::int64_t stamp_ns, FeedOutput& out);
+  void onArisFramePart(std::span<const std::uint8_t> datagram, std::int64_t stamp_ns, FeedOutput& out);
+  void onArisCommand(std::span<const std::uint8_t> bytes);
   void onBackseat(backseat::BackseatSentence sentence, std::int64_t stamp_ns, FeedOutput& out);
   Result<geometry::Pose3> backseatPoseAt(std::int64_t stamp_ns) const;
   void addOdometry(std::int64_t stamp_ns, const geometry::Pose3& T, FeedOutput& out);
@@ -141,6 +166,10 @@ class DeviceFeed {
   codec::StreamDecoder<imu::ImuCanCodec> imu_;
   codec::StreamDecoder<backseat::BackseatCodec> backseat_;
   sonar::FrameReassembler reassembler_{8};
+  sonar::ArisFrameAssembler aris_assembler_;
+  std::uint32_t aris_cookie_sent_ = 0;
+  std::uint32_t aris_cookie_received_ = 0;
+  std::uint64_t aris_frames_other_settings_ = 0;
   std::array<DeviceCounters, kAllDevices.size()> counters_{};
   std::deque<VehicleNavigation> vehicle_navigation_;                // the last two seconds of $BFNVG
   Eigen::Vector3d vehicle_velocity_mps_ = Eigen::Vector3d::Zero();  // newest $BFNVR

@@ -17,6 +17,7 @@
 #include "vog/plan/planner_config.hpp"
 #include "vog/slam/mapping_pipeline.hpp"
 #include "vog/slam/revisit_policy.hpp"
+#include "vog/sonar/aris_command.hpp"
 
 #include <Eigen/Core>
 
@@ -49,6 +50,32 @@ struct SimSection {
   double odometry_noise_scale = 0.25;  // factor on the thesis Eq. 4.1 rates (random walk)
 };
 
+// How the imaging sonar's frames arrive (devices.sonar.kind).
+enum class SonarKind {
+  kFragments,  // fragment datagrams of sonar_udp.hpp (the simulated vehicle's own format)
+  kAris,       // the ARIS live protocol: command channel, FramePart stream with acks, beacon
+};
+
+// devices.sonar.aris: the ARIS's command channel, its discovery and the settings sent to it.
+struct ArisLinkConfig {
+  std::string address;                 // the sonar's IPv4 address; empty: the sender of the first beacon
+  std::uint32_t serial_number = 0;     // with discovery, the sonar to use; 0: any
+  std::uint16_t command_port = 56888;  // TCP
+  std::uint16_t beacon_port = 56124;   // UDP port the Availability beacons arrive on; 0: not listened to
+  // The address the sonar sends its frames to (this computer, as the sonar reaches it); empty: the
+  // sonar receiver's bind_address, which must then not be a wildcard.
+  std::string receiver_address;
+  sonar::ArisSonarConfig sonar;              // range window, ping mode, frame rate, ... (the acoustic settings)
+  sonar::ArisSetFrameStreamSettings stream;  // packet-loss mitigation, interpacket delay
+  double keepalive_period_s = 1.0;           // a PING this often (the sonar drops a silent client)
+  // Frames that still carry other settings this long after SET_ACOUSTICS make the sonar degraded.
+  double settings_timeout_s = 3.0;
+  io::ReconnectConfig reconnect;  // the command channel
+
+  // Error naming the key (devices.sonar.aris.*) and its value.
+  Status validate(const std::string& bind_address) const;
+};
+
 struct DevicesSection {
   // Stamps are the monotonic clock times this: 1 on a vehicle; a simulated vehicle that runs
   // faster than real time (vogsim vehicle --speedup) sets its speed-up.
@@ -60,7 +87,9 @@ struct DevicesSection {
   bool imu_enabled = true;
   io::CanConfig imu;
   bool sonar_enabled = true;
-  io::UdpReceiverConfig sonar;
+  SonarKind sonar_kind = SonarKind::kFragments;
+  io::UdpReceiverConfig sonar;  // where the frames arrive (fragments or ARIS FramePart datagrams)
+  ArisLinkConfig aris;          // kind aris only
   bool backseat_enabled = true;
   io::TcpClientConfig backseat;
   bool aux_enabled = false;

@@ -45,6 +45,12 @@ class UdpReceiver {
   void stop();
   // Bound port (useful with port 0); 0 while not bound.
   std::uint16_t localPort() const;
+  // The numeric address the datagram being delivered came from; valid inside the handler only.
+  std::string senderAddress() const;
+  // Sends a datagram from the bound socket (replies such as acknowledgements leave from the port the
+  // peer sends to). Error naming the destination when not bound, the address is not numeric, or the
+  // send fails (counted in health().errors).
+  Status sendTo(const std::string& address, std::uint16_t port, std::span<const std::uint8_t> datagram);
   const DeviceHealth& health() const;
 
   class Impl;

@@ -275,6 +275,13 @@ struct ArisDerivedSettings {
 // rate above what the window allows).
 Result<ArisDerivedSettings> deriveArisAcousticSettings(const ArisSonarConfig& config);
 
+// What a client sends right after connecting, in order: the date, the frame-stream settings, the
+// salinity, the acoustic settings (already stamped), the focus, and last the frame-stream receiver,
+// so that the first frame the sonar sends is made with these settings.
+std::vector<ArisCommand> arisConnectCommands(const ArisDerivedSettings& settings,
+                                             const ArisSetFrameStreamSettings& stream,
+                                             const ArisSetFrameStreamReceiver& receiver, std::int64_t unix_time_s);
+
 // Gives each distinct set of acoustic settings a new cookie, so a frame's AppliedSettings says
 // which settings made it. Lifecycle: one per sonar, kept across reconnections (so no two settings
 // share a cookie); stamp() every SET_ACOUSTICS before sending it. Invariant: the cookie changes
