@@ -10,6 +10,10 @@
 #include "vog/dvl/pd0.hpp"
 #include "vog/dvl/pd6.hpp"
 #include "vog/imu/imu_can.hpp"
+#include "vog/mission/mission_store.hpp"
+#include "vog/mission/raw_log.hpp"
+#include "vog/sonar/aris_command.hpp"
+#include "vog/sonar/aris_frame_assembler.hpp"
 #include "vog/sonar/sonar_files.hpp"
 
 #include <cstdio>
@@ -251,7 +255,89 @@ int decodeSonar(const std::vector<std::uint8_t>& bytes, bool aris_only, const Pr
   return 0;
 }
 
+// Raw-log device ids of vogd's ARIS link (daemon/app DeviceId: kArisFrames, kArisCommands).
+constexpr std::uint16_t kRawArisFrames = 0x0006;
+constexpr std::uint16_t kRawArisCommands = 0x0007;
+
+Record arisCommandRecord(const sonar::ArisCommand& c, std::int64_t stamp_ns) {
+  Record r{"aris_command", {}};
+  r.add("stamp_ns", stamp_ns).add("command", std::string(sonar::arisCommandName(c)));
+  if (const auto* a = std::get_if<sonar::ArisAcousticSettings>(&c)) {
+    r.add("cookie", static_cast<std::int64_t>(a->cookie))
+        .add("ping_mode", static_cast<std::int64_t>(a->ping_mode))
+        .add("samples_per_beam", static_cast<std::int64_t>(a->samples_per_beam))
+        .add("sample_start_delay_us", static_cast<std::int64_t>(a->sample_start_delay_us))
+        .add("sample_period_us", static_cast<std::int64_t>(a->sample_period_us))
+        .add("frame_rate_hz", static_cast<double>(a->frame_rate_hz));
+  } else if (const auto* to = std::get_if<sonar::ArisSetFrameStreamReceiver>(&c)) {
+    r.add("ip", to->ip).add("port", static_cast<std::int64_t>(to->port));
+  }
+  return r;
+}
+
+// A capture of the ARIS live link: the FramePart datagrams vogd received and the commands it sent,
+// as its raw log holds them (FILE: the log, MISSION/raw.vogr, or the mission folder). The
+// datagrams go through the receiver's assembler with their reception stamps, as vogd ran them.
+int decodeArisStream(const std::string& path, const Printer& out) {
+  std::filesystem::path log = path;
+  if (std::filesystem::is_directory(log)) log /= mission::MissionStore::kRawLogFile;
+  const auto raw = mission::readRawLog(log);
+  if (!raw.ok()) {
+    std::cerr << "vogctl decode: " << raw.error().message << '\n';
+    return 1;
+  }
+  sonar::ArisFrameAssembler assembler;
+  std::int64_t commands = 0, commands_malformed = 0;
+  for (const mission::RawRecord& rec : raw->records) {
+    if (rec.device_id == kRawArisCommands) {
+      sonar::ArisCommandDecoder decoder;
+      for (const sonar::ArisDecodedCommand& d : decoder.feed(rec.bytes)) {
+        if (d.command) {
+          ++commands;
+          out.print(arisCommandRecord(*d.command, rec.stamp_ns));
+        } else {
+          ++commands_malformed;
+        }
+      }
+      continue;
+    }
+    if (rec.device_id != kRawArisFrames) continue;
+    const sonar::ArisPartResult r = assembler.add(rec.bytes, 1e-9 * static_cast<double>(rec.stamp_ns));
+    if (!r.frame) continue;
+    const sonar::SonarFrame& f = r.frame->frame;
+    double sum = 0.0;
+    for (const std::uint8_t v : f.samples) sum += v;
+    out.print(Record{"aris_frame", {}}
+                  .add("index", static_cast<std::int64_t>(f.frame_index))
+                  .add("stamp_ns", rec.stamp_ns)
+                  .add("cookie", static_cast<std::int64_t>(r.frame->meta.settings_cookie))
+                  .add("ping_mode", static_cast<std::int64_t>(r.frame->meta.ping_mode))
+                  .add("beams", static_cast<std::int64_t>(f.n_beams))
+                  .add("samples", static_cast<std::int64_t>(f.n_samples))
+                  .add("window_start_m", f.window_start_m)
+                  .add("window_length_m", f.window_length_m)
+                  .add("mean_intensity", f.samples.empty() ? 0.0 : sum / static_cast<double>(f.samples.size())));
+  }
+  const sonar::ArisFrameAssemblerStats& st = assembler.stats();
+  Record summary{"summary", {}};
+  summary.add("datagrams", static_cast<std::int64_t>(st.datagrams))
+      .add("frames", static_cast<std::int64_t>(st.frames_completed))
+      .add("frames_dropped_incomplete", static_cast<std::int64_t>(st.frames_dropped_incomplete))
+      .add("datagrams_duplicated", static_cast<std::int64_t>(st.datagrams_duplicated))
+      .add("datagrams_refused", static_cast<std::int64_t>(st.refusedTotal()));
+  for (std::size_t i = 0; i < sonar::kArisPartRefusalCount; ++i) {
+    if (st.refused[i] > 0) {
+      summary.add("refused_" + std::string(sonar::arisPartRefusalName(static_cast<sonar::ArisPartRefusal>(i))),
+                  static_cast<std::int64_t>(st.refused[i]));
+    }
+  }
+  summary.add("commands", commands).add("commands_malformed", commands_malformed);
+  out.print(summary);
+  return 0;
+}
+
 int runDecode(const std::string& format, const std::string& path, bool json) {
+  if (format == "aris-stream") return decodeArisStream(path, Printer{json});
   const auto bytes = sonar::loadFile(path);
   if (!bytes.ok()) {
     std::cerr << "vogctl decode: " << bytes.error().message << '\n';
@@ -281,8 +367,9 @@ void addDecodeCommand(CLI::App& app, CommandAction& action) {
   auto opts = std::make_shared<Options>();
   cmd->add_option("--format", opts->format, "Wire format of the recording")
       ->required()
-      ->check(CLI::IsMember({"pd0", "pd6", "digiquartz", "ddf", "aris", "backseat", "imu-can"}));
-  cmd->add_option("FILE", opts->path, "Recording to decode")->required();
+      ->check(CLI::IsMember({"pd0", "pd6", "digiquartz", "ddf", "aris", "aris-stream", "backseat", "imu-can"}));
+  cmd->add_option("FILE", opts->path, "Recording to decode (aris-stream: a mission's raw log or its folder)")
+      ->required();
   cmd->add_flag("--json", opts->json, "One JSON object per line instead of text");
   cmd->callback([opts, &action] { action = [opts] { return runDecode(opts->format, opts->path, opts->json); }; });
 }
