@@ -6,6 +6,7 @@
 #include "vog/io/serial.hpp"
 #include "vog/io/tcp_client.hpp"
 #include "vog/io/udp.hpp"
+#include "vog/sonar/aris_availability.hpp"
 #include "vog/sonar/aris_command.hpp"
 
 #include <asio/executor_work_guard.hpp>
@@ -144,10 +145,45 @@ struct DeviceSource::Impl {
     sendAris(sonar::ArisPing{});
   }
 
+  // An Availability beacon: who the sonar is, and where (discovery when no address is configured).
+  void onArisBeacon(std::span<const std::uint8_t> datagram) {
+    auto beacon = sonar::decodeArisAvailability(datagram);
+    if (!beacon) {
+      ++aris_beacons_refused;
+      aris_beacon_error = beacon.error().message;
+      return;
+    }
+    if (config.aris.serial_number != 0 && beacon->serial_number != config.aris.serial_number) return;
+    const std::string from = aris_beacon->senderAddress();
+    if (!aris_address.empty() && from != aris_address) return;  // another sonar, or one not ours
+    aris_identity = *beacon;
+    if (aris_commands) return;
+    aris_address = from;
+    openArisCommands();
+    (void)aris_commands->start();  // config validated: starting only schedules the connection
+  }
+
   // The sonar's row in health: the frame stream and the command channel together.
   std::string arisDetail(std::int64_t t, api::DeviceState& state) const {
-    std::string d = "ARIS " + std::string(sonar::arisModelLimits(config.aris.sonar.model).name) + " at " +
-                    (aris_address.empty() ? "(waiting for its beacon)" : aris_address);
+    std::string d;
+    if (aris_identity) {
+      const sonar::ArisAvailability& a = *aris_identity;
+      const sonar::ArisModelLimits& m = sonar::arisModelLimits(a.system_type);
+      d = std::string(m.name) + " serial " + std::to_string(a.serial_number) + " software " +
+          std::to_string(a.version_major) + "." + std::to_string(a.version_minor) + "." +
+          std::to_string(a.version_build) + " at " + aris_address;
+      if (a.system_type != config.aris.sonar.model) {
+        d += ": configured as an " + std::string(sonar::arisModelLimits(config.aris.sonar.model).name) +
+             ", its settings may not be taken";
+        state = api::DeviceState::kDegraded;
+      }
+    } else {
+      d = std::string(sonar::arisModelLimits(config.aris.sonar.model).name) + " at " +
+          (aris_address.empty() ? "(waiting for its beacon)" : aris_address);
+    }
+    if (aris_beacons_refused > 0) {
+      d += " (" + std::to_string(aris_beacons_refused) + " beacons refused, last: " + aris_beacon_error + ")";
+    }
     if (aris_commands == nullptr || aris_commands->health().state != io::LinkState::kConnected) {
       d += ", command channel " +
            (aris_commands == nullptr ? std::string("not open") : "down: " + aris_commands->health().reason);
@@ -196,6 +232,16 @@ struct DeviceSource::Impl {
       sonar = std::make_unique<io::UdpReceiver>(io, config.sonar, stampClock(),
                                                 bytesTo(arisKind() ? DeviceId::kArisFrames : DeviceId::kSonar));
       if (arisKind() && !aris_address.empty()) openArisCommands();
+      if (arisKind() && config.aris.beacon_port != 0) {
+        io::UdpReceiverConfig b;
+        b.bind_address = "0.0.0.0";  // beacons are broadcast
+        b.port = config.aris.beacon_port;
+        b.max_datagram_bytes = 4096;
+        b.receive_buffer_bytes = 64 * 1024;
+        b.reconnect = config.aris.reconnect;
+        aris_beacon = std::make_unique<io::UdpReceiver>(
+            io, b, stampClock(), [this](std::span<const std::uint8_t> d, std::int64_t) { onArisBeacon(d); });
+      }
     }
     if (config.backseat_enabled) {
       backseat = std::make_unique<io::TcpClient>(io, config.backseat, stampClock(), bytesTo(DeviceId::kBackseat));
@@ -217,6 +263,10 @@ struct DeviceSource::Impl {
     }
     if (aris_commands) {
       if (Status s = aris_commands->start(); !s.ok()) return Error{"devices.sonar.aris: " + s.error().message};
+    }
+    if (aris_beacon) {
+      if (Status s = aris_beacon->start(); !s.ok())
+        return Error{"devices.sonar.aris.beacon_port: " + s.error().message};
     }
     if (backseat) {
       if (Status s = backseat->start(); !s.ok()) return Error{"devices.backseat: " + s.error().message};
@@ -352,6 +402,10 @@ struct DeviceSource::Impl {
   std::optional<sonar::ArisDerivedSettings> aris_settings;  // derived from the config at create()
   sonar::ArisSettingsCookies aris_cookies;
   std::string aris_address;  // configured, or the beacon's sender
+  std::unique_ptr<io::UdpReceiver> aris_beacon;
+  std::optional<sonar::ArisAvailability> aris_identity;  // the newest beacon of our sonar
+  std::uint64_t aris_beacons_refused = 0;
+  std::string aris_beacon_error;
   std::int64_t aris_settings_sent_ns = 0;
   std::int64_t aris_ping_ns = 0;
 
@@ -411,6 +465,7 @@ void DeviceSource::stop() {
     if (d.imu) d.imu->stop();
     if (d.sonar) d.sonar->stop();
     if (d.aris_commands) d.aris_commands->stop();
+    if (d.aris_beacon) d.aris_beacon->stop();
     if (d.backseat) d.backseat->stop();
     d.io.stop();
   });
