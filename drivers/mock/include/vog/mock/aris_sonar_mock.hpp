@@ -13,7 +13,9 @@
 //   - frames: ping() turns the simulator's beam-order intensity frame into the frame the applied
 //     acoustic settings describe, and ArisFrameSender sends it (sonar order, FramePart datagrams)
 //     to the receiver from the socket bound to ack_port, where the receiver's FramePartAcks come
-//     back; resends happen on the device thread at the sender's deadlines;
+//     back; resends happen on the device thread at the sender's deadlines.
+//     The sonar pings when ping() is called: the settings' frame_rate_hz is checked, not used, and
+//     the interpacket delay of SET_FRAMESTREAM_SETTINGS is kept but not applied (loopback needs none);
 //   - faults: seeded per-datagram loss (both directions: frame parts and acks), duplication and
 //     reordering, and reboot(): everything the client set is forgotten, frame indices restart at 1,
 //     and the sonar is silent (no beacon, no command listener) for a while.
@@ -34,6 +36,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace vog::mock {
