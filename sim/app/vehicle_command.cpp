@@ -37,8 +37,21 @@ VehicleCommand::VehicleCommand(CLI::App& app) {
   sub_->add_option("--control", control_socket_, "Unix socket accepting control commands (besides stdin)");
   sub_->add_option("--backseat-port", backseat_port_, "Backseat TCP port on 127.0.0.1 (0 = any free)")
       ->check(CLI::Range(0, 65535));
-  sub_->add_option("--sonar-port", sonar_port_, "UDP port on 127.0.0.1 the sonar frames go to (0 = sonar off)")
+  sub_->add_option("--sonar-port", sonar_port_,
+                   "Sonar kind fragments: UDP port on 127.0.0.1 the sonar frames go to (0 = sonar off)")
       ->check(CLI::Range(0, 65535));
+  sub_->add_option("--sonar-kind", sonar_kind_,
+                   "fragments: frames as fragment datagrams to --sonar-port; aris: a mock ARIS sonar on the ARIS live "
+                   "protocol (command TCP port, Availability beacon, frames to the receiver its client sets)")
+      ->check(CLI::IsMember({"fragments", "aris"}));
+  sub_->add_option("--aris-command-port", aris_command_port_,
+                   "Sonar kind aris: command TCP port on 127.0.0.1 (0 = any free; a real ARIS: 56888)")
+      ->check(CLI::Range(0, 65535));
+  sub_->add_option("--aris-beacon-port", aris_beacon_port_,
+                   "Sonar kind aris: UDP port on 127.0.0.1 the Availability beacon goes to (0 = no beacon; a real "
+                   "ARIS: 56124)")
+      ->check(CLI::Range(0, 65535));
+  sub_->add_option("--aris-serial", aris_serial_, "Sonar kind aris: serial number in the beacon");
   sub_->add_option("--duration-s", duration_s_, "Simulated time limit, s (0 = until SIGTERM/SIGINT)")
       ->check(CLI::Range(0.0, 1e7));
   sub_->add_option("--origin-lat", origin_lat_deg_, "Latitude of world (0, 0), deg")->check(CLI::Range(-80.0, 80.0));
@@ -89,6 +102,10 @@ int VehicleCommand::run() {
   config.run_dir = run_dir;
   config.backseat_port = static_cast<std::uint16_t>(backseat_port_);
   config.sonar_port = static_cast<std::uint16_t>(sonar_port_);
+  config.sonar_kind = *vog::vehicle::parseSonarKind(sonar_kind_);  // checked by the option
+  config.aris_command_port = static_cast<std::uint16_t>(aris_command_port_);
+  config.aris_beacon_port = static_cast<std::uint16_t>(aris_beacon_port_);
+  config.aris_serial_number = aris_serial_;
   config.origin_latitude_deg = origin_lat_deg_;
   config.origin_longitude_deg = origin_lon_deg_;
   auto vehicle = vog::vehicle::SimVehicle::create(**world, config, [](const std::string& e) { spdlog::info("{}", e); });
@@ -125,11 +142,16 @@ int VehicleCommand::run() {
     v.stop();
     return 2;
   }
+  const std::string sonar_text = endpoints.sonar_kind == vog::vehicle::SonarKind::kAris
+                                     ? "sonar aris serial " + std::to_string(endpoints.sonar_serial_number) +
+                                           " commands tcp 127.0.0.1:" + std::to_string(endpoints.sonar_command_port) +
+                                           " beacon udp 127.0.0.1:" + std::to_string(endpoints.sonar_beacon_port)
+                                     : "sonar udp 127.0.0.1:" + std::to_string(endpoints.sonar_port);
   spdlog::info(
-      "vehicle running: scene {} seed {} speedup {}; dvl {} depth {} imu {} sonar udp 127.0.0.1:{} backseat "
-      "tcp 127.0.0.1:{}; endpoints {}",
+      "vehicle running: scene {} seed {} speedup {}; dvl {} depth {} imu {} {} backseat tcp 127.0.0.1:{}; "
+      "endpoints {}",
       endpoints.scene_name, seed_, speedup_, endpoints.dvl_device, endpoints.depth_device, endpoints.imu_unix_seqpacket,
-      endpoints.sonar_port, endpoints.backseat_port, endpoints_file.string());
+      sonar_text, endpoints.backseat_port, endpoints_file.string());
 
   // Control lines on stdin, replies on stdout.
   std::atomic<bool> quit{false};

@@ -26,6 +26,10 @@ class VehicleCommand {
   std::string control_socket_;
   int backseat_port_ = 29500;
   int sonar_port_ = 52102;
+  std::string sonar_kind_ = "fragments";
+  int aris_command_port_ = 0;
+  int aris_beacon_port_ = 0;
+  std::uint32_t aris_serial_ = 1234;
   double duration_s_ = 0.0;
   double origin_lat_deg_ = 42.0;
   double origin_lon_deg_ = -71.0;

@@ -5,44 +5,44 @@
 
 namespace vog::sonar {
 
-using detail::parsed;
-using detail::serialized;
-
-std::vector<std::uint8_t> encodeArisAvailability(const ArisAvailability& a) {
+std::vector<std::uint8_t> encodeArisAvailability(const ArisAvailability& availability) {
   aris::Availability msg;
-  msg.set_serialnumber(a.serial_number);
-  msg.set_systemtype(static_cast<aris::Availability::SystemType>(a.system_type));
-  msg.mutable_softwareversion()->set_major(a.version_major);
-  msg.mutable_softwareversion()->set_minor(a.version_minor);
-  msg.mutable_softwareversion()->set_buildnumber(a.version_build);
-  msg.set_connectionstate(a.busy ? aris::Availability::BUSY : aris::Availability::AVAILABLE);
-  for (const std::string& c : a.capabilities) msg.mutable_capabilities()->add_enabled(c);
-  return serialized(msg);
+  msg.set_serialnumber(availability.serial_number);
+  msg.set_systemtype(static_cast<aris::Availability_SystemType>(availability.system_type));
+  aris::Availability_SoftwareVersion* version = msg.mutable_softwareversion();
+  version->set_major(availability.version_major);
+  version->set_minor(availability.version_minor);
+  version->set_buildnumber(availability.version_build);
+  msg.set_connectionstate(availability.busy ? aris::Availability_ConnectionState_BUSY
+                                            : aris::Availability_ConnectionState_AVAILABLE);
+  aris::Availability_Capabilities* capabilities = msg.mutable_capabilities();
+  for (const std::string& c : availability.capabilities) capabilities->add_enabled(c);
+  return detail::serialized(msg);
 }
 
 Result<ArisAvailability> decodeArisAvailability(std::span<const std::uint8_t> datagram) {
   aris::Availability msg;
-  if (!parsed(msg, datagram)) {
-    return Error{"ARIS beacon: " + std::to_string(datagram.size()) + " bytes are not an Availability message"};
+  if (!detail::parsed(msg, datagram)) {
+    return Error{"ARIS Availability: " + std::to_string(datagram.size()) + " bytes do not decode"};
   }
-  // proto3 keeps enum values it does not know: they are the sender's, not ours to guess.
-  const int type = msg.systemtype();
-  if (type < 0 || type > static_cast<int>(ArisSystemType::k1200)) {
-    return Error{"ARIS beacon: systemType " + std::to_string(type) + " is not 0 (1800), 1 (3000) or 2 (1200)"};
+  // proto3 enums are open: an undefined value parses and is kept as its number.
+  if (!aris::Availability_SystemType_IsValid(msg.systemtype())) {
+    return Error{"ARIS Availability: systemType " + std::to_string(msg.systemtype()) +
+                 " unknown (ARIS_1800=0, ARIS_3000=1, ARIS_1200=2)"};
   }
-  const int state = msg.connectionstate();
-  if (state != aris::Availability::AVAILABLE && state != aris::Availability::BUSY) {
-    return Error{"ARIS beacon: connectionState " + std::to_string(state) + " is not 0 (available) or 1 (busy)"};
+  if (!aris::Availability_ConnectionState_IsValid(msg.connectionstate())) {
+    return Error{"ARIS Availability: connectionState " + std::to_string(msg.connectionstate()) +
+                 " unknown (AVAILABLE=0, BUSY=1)"};
   }
-  ArisAvailability a;
-  a.serial_number = msg.serialnumber();
-  a.system_type = static_cast<ArisSystemType>(type);
-  a.version_major = msg.softwareversion().major();
-  a.version_minor = msg.softwareversion().minor();
-  a.version_build = msg.softwareversion().buildnumber();
-  a.busy = state == aris::Availability::BUSY;
-  a.capabilities.assign(msg.capabilities().enabled().begin(), msg.capabilities().enabled().end());
-  return a;
+  ArisAvailability out;
+  out.serial_number = msg.serialnumber();
+  out.system_type = static_cast<ArisSystemType>(msg.systemtype());
+  out.version_major = msg.softwareversion().major();
+  out.version_minor = msg.softwareversion().minor();
+  out.version_build = msg.softwareversion().buildnumber();
+  out.busy = msg.connectionstate() == aris::Availability_ConnectionState_BUSY;
+  out.capabilities.assign(msg.capabilities().enabled().begin(), msg.capabilities().enabled().end());
+  return out;
 }
 
 }  // namespace vog::sonar

@@ -31,6 +31,7 @@ constexpr std::size_t kSoundSpeed = 464;
 constexpr std::size_t kSamplesPerBeam = 468;
 constexpr std::size_t kSampleStartDelay = 476;
 constexpr std::size_t kReorderedSamples = 516;
+constexpr std::size_t kSalinity = 520;
 constexpr std::size_t kAppliedSettings = 680;
 static_assert(kAppliedSettings + 4 == kArisFrameHeaderUsedBytes);
 // File header (FileHeader.fields.csv).
@@ -78,6 +79,7 @@ Result<ArisFrameMeta> decodeArisFrameHeader(std::span<const std::uint8_t> h) {
   meta.samples_per_beam = readU32LE(h, aris::kSamplesPerBeam);
   meta.sound_speed_mps = readF32LE(h, aris::kSoundSpeed);
   meta.reordered_samples = readU32LE(h, aris::kReorderedSamples) != 0;
+  meta.salinity = readU32LE(h, aris::kSalinity);
   meta.settings_cookie = readU32LE(h, aris::kAppliedSettings);
   return meta;
 }
@@ -184,6 +186,7 @@ Result<std::vector<std::uint8_t>> encodeArisFrameHeader(const SonarFrame& f, con
   writeU32LE(h, aris::kSamplesPerBeam, static_cast<std::uint32_t>(f.n_samples));
   writeU32LE(h, aris::kSampleStartDelay, static_cast<std::uint32_t>(delay_us));
   writeU32LE(h, aris::kReorderedSamples, options.reordered_samples ? 1U : 0U);
+  writeU32LE(h, aris::kSalinity, options.salinity);
   writeU32LE(h, aris::kAppliedSettings, options.settings_cookie);
   return h;
 }

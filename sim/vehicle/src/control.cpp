@@ -40,7 +40,25 @@ Result<double> parseSeconds(std::string_view w) {
   return v;
 }
 
+Result<double> parseProbability(std::string_view w) {
+  double v = 0.0;
+  const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
+  if (ec != std::errc{} || ptr != w.data() + w.size() || !(v >= 0.0 && v <= 1.0))
+    return Error{"probability must be a number in [0, 1], got '" + std::string(w) + "'"};
+  return v;
+}
+
 }  // namespace
+
+const char* arisActionName(ArisAction action) {
+  switch (action) {
+    case ArisAction::kLoss: return "loss";
+    case ArisAction::kDuplicate: return "dup";
+    case ArisAction::kReorder: return "reorder";
+    case ArisAction::kReboot: return "reboot";
+  }
+  return "?";
+}
 
 const char* toString(Device device) {
   switch (device) {
@@ -65,7 +83,7 @@ const char* faultName(mock::Fault fault) {
 
 Result<ControlCommand> parseControlCommand(std::string_view line) {
   const std::vector<std::string_view> w = words(line);
-  if (w.empty()) return Error{"empty command (expected fault, unplug or status)"};
+  if (w.empty()) return Error{"empty command (expected fault, unplug, aris or status)"};
   ControlCommand c;
   if (w[0] == "status") {
     if (w.size() != 1) return Error{"status takes no arguments"};
@@ -103,7 +121,32 @@ Result<ControlCommand> parseControlCommand(std::string_view line) {
     c.seconds = *s;
     return c;
   }
-  return Error{"unknown command '" + std::string(w[0]) + "' (expected fault, unplug or status)"};
+  if (w[0] == "aris") {
+    if (w.size() != 3) return Error{"usage: aris loss|dup|reorder <probability> or aris reboot <seconds>"};
+    c.kind = ControlCommand::Kind::kAris;
+    if (w[1] == "reboot") {
+      auto s = parseSeconds(w[2]);
+      if (!s) return s.error();
+      c.aris_action = ArisAction::kReboot;
+      c.seconds = *s;
+      return c;
+    }
+    bool known = false;
+    for (const ArisAction a : {ArisAction::kLoss, ArisAction::kDuplicate, ArisAction::kReorder}) {
+      if (w[1] == arisActionName(a)) {
+        c.aris_action = a;
+        known = true;
+      }
+    }
+    if (!known) {
+      return Error{"unknown aris command '" + std::string(w[1]) + "' (expected loss, dup, reorder or reboot)"};
+    }
+    auto p = parseProbability(w[2]);
+    if (!p) return p.error();
+    c.probability = *p;
+    return c;
+  }
+  return Error{"unknown command '" + std::string(w[0]) + "' (expected fault, unplug, aris or status)"};
 }
 
 // ------------------------------------------------------------------------------ ControlServer

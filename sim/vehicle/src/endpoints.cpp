@@ -11,6 +11,20 @@
 
 namespace vog::vehicle {
 
+const char* toString(SonarKind kind) {
+  switch (kind) {
+    case SonarKind::kFragments: return "fragments";
+    case SonarKind::kAris: return "aris";
+  }
+  return "?";
+}
+
+Result<SonarKind> parseSonarKind(std::string_view text) {
+  if (text == "fragments") return SonarKind::kFragments;
+  if (text == "aris") return SonarKind::kAris;
+  return Error{"sonar kind '" + std::string(text) + "' unknown (expected fragments or aris)"};
+}
+
 Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoints& e) {
   YAML::Emitter out;
   out.SetDoublePrecision(17);
@@ -39,8 +53,15 @@ Status writeEndpointsFile(const std::filesystem::path& file, const VehicleEndpoi
       << "reading_is_absolute" << YAML::Value << e.depth_reading_is_absolute << YAML::EndMap;
   out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap << YAML::Key << "unix_seqpacket" << YAML::Value
       << e.imu_unix_seqpacket << YAML::Key << "base_id" << YAML::Value << e.imu_base_id << YAML::EndMap;
-  out << YAML::Key << "sonar" << YAML::Value << YAML::BeginMap << YAML::Key << "address" << YAML::Value
-      << e.sonar_address << YAML::Key << "port" << YAML::Value << e.sonar_port << YAML::EndMap;
+  out << YAML::Key << "sonar" << YAML::Value << YAML::BeginMap << YAML::Key << "kind" << YAML::Value
+      << toString(e.sonar_kind) << YAML::Key << "address" << YAML::Value << e.sonar_address;
+  if (e.sonar_kind == SonarKind::kAris) {
+    out << YAML::Key << "command_port" << YAML::Value << e.sonar_command_port << YAML::Key << "beacon_port"
+        << YAML::Value << e.sonar_beacon_port << YAML::Key << "serial_number" << YAML::Value << e.sonar_serial_number;
+  } else {
+    out << YAML::Key << "port" << YAML::Value << e.sonar_port;
+  }
+  out << YAML::EndMap;
   out << YAML::Key << "backseat" << YAML::Value << YAML::BeginMap << YAML::Key << "address" << YAML::Value
       << e.backseat_address << YAML::Key << "port" << YAML::Value << e.backseat_port << YAML::EndMap;
   out << YAML::Key << "control" << YAML::Value << YAML::BeginMap << YAML::Key << "socket" << YAML::Value
@@ -103,8 +124,20 @@ Result<VehicleEndpoints> readEndpointsFile(const std::filesystem::path& file) {
     num("depth", "reading_is_absolute", e.depth_reading_is_absolute);
     num("imu", "unix_seqpacket", e.imu_unix_seqpacket);
     num("imu", "base_id", e.imu_base_id);
+    const YAML::Node sonar = root["sonar"];
+    if (sonar && sonar["kind"] && !sonar["kind"].IsNull()) {
+      auto kind = parseSonarKind(sonar["kind"].as<std::string>());
+      if (!kind) return Error{file.string() + ": sonar.kind: " + kind.error().message};
+      e.sonar_kind = *kind;
+    }
     num("sonar", "address", e.sonar_address);
-    num("sonar", "port", e.sonar_port);
+    if (e.sonar_kind == SonarKind::kAris) {
+      num("sonar", "command_port", e.sonar_command_port);
+      num("sonar", "beacon_port", e.sonar_beacon_port);
+      num("sonar", "serial_number", e.sonar_serial_number);
+    } else {
+      num("sonar", "port", e.sonar_port);
+    }
     num("backseat", "address", e.backseat_address);
     num("backseat", "port", e.backseat_port);
     const YAML::Node control = root["control"];

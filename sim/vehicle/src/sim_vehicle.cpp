@@ -80,6 +80,7 @@ class SimVehicle::Impl final : public sim::SimulationSink {
     // The backseat server's thread calls back into this object: close it before any member goes.
     backseat_.reset();
     sonar_.reset();
+    aris_sonar_.reset();
     imu_.reset();
     depth_.reset();
     dvl_.reset();
@@ -119,6 +120,8 @@ class SimVehicle::Impl final : public sim::SimulationSink {
   }
   void armFault(Device d, mock::FaultInjector& faults);
   void execute(const ControlCommand& c, std::int64_t now_ns);
+  Result<std::string> controlAris(const ControlCommand& c);
+  std::string arisStatus() const;
   void serviceTimers(std::int64_t now_ns);
   Status unplug(Device d);
   Status replug(Device d);
@@ -137,7 +140,8 @@ class SimVehicle::Impl final : public sim::SimulationSink {
   std::unique_ptr<mock::DvlMock> dvl_;
   std::unique_ptr<mock::DepthMock> depth_;
   std::unique_ptr<mock::ImuMock> imu_;
-  std::unique_ptr<mock::SonarMock> sonar_;
+  std::unique_ptr<mock::SonarMock> sonar_;           // sonar kind kFragments with a port
+  std::unique_ptr<mock::ArisSonarMock> aris_sonar_;  // sonar kind kAris
   std::unique_ptr<mock::StreamServer> backseat_;
   mock::FaultInjector backseat_faults_;
   std::vector<std::uint8_t> backseat_pending_;  // backseat server thread: undecoded payload bytes
@@ -175,7 +179,8 @@ class SimVehicle::Impl final : public sim::SimulationSink {
 Status SimVehicle::Impl::open() {
   sim::LockstepConfig lc = config_.lockstep;
   lc.seed = config_.seed;
-  lc.frame_every = config_.sonar_port != 0 ? 1 : 0;  // a frame for every ping that is sent
+  // A frame for every ping that is sent.
+  lc.frame_every = config_.sonar_kind == SonarKind::kAris || config_.sonar_port != 0 ? 1 : 0;
   auto sim = sim::LockstepSimulation::create(world_, lc);
   if (!sim) return sim.error();
   sim_.emplace(std::move(sim).value());
@@ -190,7 +195,16 @@ Status SimVehicle::Impl::open() {
   auto imu = mock::ImuMock::create((dir / "imu.sock").string(), imu::ImuCanConfig{}, config_.seed + 3);
   if (!imu) return Error{"imu: " + imu.error().message};
   imu_ = std::move(imu).value();
-  if (config_.sonar_port != 0) {
+  if (config_.sonar_kind == SonarKind::kAris) {
+    mock::ArisSonarMockConfig ac;
+    ac.serial_number = config_.aris_serial_number;
+    ac.command_port = config_.aris_command_port;
+    ac.beacon_port = config_.aris_beacon_port;
+    ac.seed = config_.seed + 4;
+    auto aris = mock::ArisSonarMock::create(ac);
+    if (!aris) return Error{"sonar: " + aris.error().message};
+    aris_sonar_ = std::move(aris).value();
+  } else if (config_.sonar_port != 0) {
     auto sonar = mock::SonarMock::create(config_.sonar_port, config_.seed + 4);
     if (!sonar) return Error{"sonar: " + sonar.error().message};
     sonar_ = std::move(sonar).value();
@@ -359,12 +373,16 @@ void SimVehicle::Impl::depth(const sim::DepthSample& sample) {
 
 void SimVehicle::Impl::scan(std::uint32_t /*scan_index*/, const sim::SonarPing& ping, const geometry::Pose3& /*T_true*/,
                             const geometry::Pose3& /*T_odom*/) {
-  if (!sonar_ || ping.frame.n_samples == 0) return;
+  if ((!sonar_ && !aris_sonar_) || ping.frame.n_samples == 0) return;
   {
     // Kept before sending, so a receiver that looks the scan up on arrival finds it.
     std::lock_guard<std::mutex> lock(mutex_);
     scan_history_.emplace_back(ping.frame.frame_index, ping.scan);
     if (scan_history_.size() > 64) scan_history_.pop_front();
+  }
+  if (aris_sonar_) {
+    if (auto st = aris_sonar_->ping(ping.frame, ping.frame.stamp_ns); !st) event("sonar: " + st.error().message);
+    return;
   }
   armFault(Device::kSonar, sonar_->faults());
   if (auto st = sonar_->send(ping.frame); !st) event("sonar: " + st.error().message);
@@ -535,7 +553,12 @@ Result<std::string> SimVehicle::Impl::control(const std::string& line) {
       out += " target=" + fmt(s.target_xyz_world->x()) + "," + fmt(s.target_xyz_world->y()) + "," +
              fmt(s.target_xyz_world->z());
     }
+    if (aris_sonar_) out += " " + arisStatus();
     return out;
+  }
+  if (c->kind == ControlCommand::Kind::kAris) return controlAris(*c);
+  if (c->device == Device::kSonar && aris_sonar_) {
+    return Error{"the sonar is an ARIS: use aris loss|dup|reorder <probability> or aris reboot <seconds>"};
   }
   if (c->device == Device::kSonar && !sonar_) return Error{"sonar is off (no --sonar-port)"};
   std::lock_guard<std::mutex> lock(mutex_);
@@ -544,6 +567,60 @@ Result<std::string> SimVehicle::Impl::control(const std::string& line) {
   return std::string("ok ") + (c->kind == ControlCommand::Kind::kFault ? "fault " : "unplug ") + toString(c->device) +
          (c->kind == ControlCommand::Kind::kFault ? std::string(" ") + faultName(c->fault) : std::string()) + " for " +
          fmt(c->seconds, 2) + " s";
+}
+
+Result<std::string> SimVehicle::Impl::controlAris(const ControlCommand& c) {
+  if (!aris_sonar_) return Error{"the sonar is not an ARIS (sonar kind fragments)"};
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (finished_ || stop_) return Error{"vehicle is not running"};
+  }
+  const char* name = arisActionName(c.aris_action);
+  if (c.aris_action == ArisAction::kReboot) {
+    // The mock's timers run on the wall clock: simulated seconds / speedup.
+    if (Status st = aris_sonar_->reboot(c.seconds / config_.speedup); !st) return st.error();
+    event("aris sonar rebooting for " + fmt(c.seconds, 2) + " s");
+    return "ok aris reboot for " + fmt(c.seconds, 2) + " s";
+  }
+  mock::ArisLinkFaults f = aris_sonar_->faults();
+  double& target = c.aris_action == ArisAction::kLoss        ? f.loss
+                   : c.aris_action == ArisAction::kDuplicate ? f.duplicate
+                                                             : f.reorder;
+  target = c.probability;
+  if (Status st = aris_sonar_->setFaults(f); !st) return st.error();
+  event(std::string("aris ") + name + " probability " + fmt(c.probability, 3));
+  return std::string("ok aris ") + name + " " + fmt(c.probability, 3);
+}
+
+std::string SimVehicle::Impl::arisStatus() const {
+  const mock::ArisSonarMockStats a = aris_sonar_->stats();
+  const mock::ArisMockSettings s = aris_sonar_->appliedSettings();
+  const mock::ArisLinkFaults f = aris_sonar_->faults();
+  std::string out =
+      "aris_connected=" + std::to_string(s.connected ? 1 : 0) +
+      " aris_rebooting=" + std::to_string(s.rebooting ? 1 : 0) +
+      " aris_cookie=" + std::to_string(s.acoustics ? s.acoustics->cookie : 0) +
+      " aris_commands=" + std::to_string(a.commands_applied) + "/" +
+      std::to_string(a.commands_applied + a.refusedTotal()) + " aris_connections=" + std::to_string(a.connections) +
+      " aris_frames_sent=" + std::to_string(a.frames_sent) +
+      " aris_frames_finished=" + std::to_string(a.frames_finished) +
+      " aris_frames_given_up=" + std::to_string(a.frames_given_up) +
+      " aris_datagrams=" + std::to_string(a.datagrams_sent) + " aris_resent=" + std::to_string(a.datagrams_resent) +
+      " aris_lost=" + std::to_string(a.datagrams_lost) + " aris_acks=" + std::to_string(a.acks_received) +
+      " aris_loss=" + fmt(f.loss, 3) + " aris_dup=" + fmt(f.duplicate, 3) + " aris_reorder=" + fmt(f.reorder, 3);
+  for (std::size_t r = 0; r < sonar::kArisCommandRefusalCount; ++r) {
+    if (a.commands_refused[r] != 0) {
+      out += " aris_refused_" + std::string(sonar::arisCommandRefusalName(static_cast<sonar::ArisCommandRefusal>(r))) +
+             "=" + std::to_string(a.commands_refused[r]);
+    }
+  }
+  for (std::size_t r = 0; r < mock::kArisPingSkipCount; ++r) {
+    if (a.pings_skipped[r] != 0) {
+      out += " aris_skipped_" + std::string(mock::arisPingSkipName(static_cast<mock::ArisPingSkip>(r))) + "=" +
+             std::to_string(a.pings_skipped[r]);
+    }
+  }
+  return out;
 }
 
 Status SimVehicle::Impl::unplug(Device d) {
@@ -638,14 +715,26 @@ VehicleEndpoints SimVehicle::Impl::endpoints() const {
   e.depth_reading_is_absolute = config_.wire.depth.reading_is_absolute;
   e.imu_unix_seqpacket = (config_.run_dir / "imu.sock").string();
   e.imu_base_id = imu::can_layout::kDefaultBaseId;
-  e.sonar_port = config_.sonar_port;
+  e.sonar_kind = config_.sonar_kind;
+  if (aris_sonar_) {
+    e.sonar_command_port = aris_sonar_->commandPort();
+    e.sonar_beacon_port = config_.aris_beacon_port;
+    e.sonar_serial_number = config_.aris_serial_number;
+  } else {
+    e.sonar_port = config_.sonar_port;
+  }
   e.backseat_port = backseat_->port();
   return e;
 }
 
 VehicleSnapshot SimVehicle::Impl::snapshot() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return snapshot_;
+  VehicleSnapshot out;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    out = snapshot_;
+  }
+  if (aris_sonar_) out.aris = aris_sonar_->stats();  // thread-safe on its own
+  return out;
 }
 
 Result<sim::VehicleState> SimVehicle::Impl::truthAt(std::int64_t stamp_ns) const {

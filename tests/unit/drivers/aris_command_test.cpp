@@ -1,6 +1,5 @@
 // ARIS live protocol, command channel: wire bytes, the sonar-side stream decoder and checks, and the
 // acoustic settings derived from a range window.
-#include "vog/sonar/aris_availability.hpp"
 #include "vog/sonar/aris_command.hpp"
 #include "test_support.hpp"
 
@@ -568,44 +567,6 @@ TEST(ArisAcousticDerivation, BadInputsAreErrorsNamingTheKeyAndValue) {
     ASSERT_FALSE(d.ok());
     EXPECT_TRUE(test::contains(d.error().message, b.error)) << d.error().message;
   }
-}
-
-// The beacon: a round trip; fields a newer sonar adds (cpuTemp = 8, a float) are skipped; values
-// outside the protocol's enums and bytes that are no message are refused by name.
-TEST(ArisAvailability, RoundTripsSkipsUnknownFieldsAndRefusesWhatIsNotABeacon) {
-  const ArisAvailability a{.serial_number = 1234,
-                           .system_type = ArisSystemType::k3000,
-                           .version_major = 2,
-                           .version_minor = 6,
-                           .version_build = 8123,
-                           .busy = true,
-                           .capabilities = {"Telephoto", "Rotator"}};
-  std::vector<std::uint8_t> bytes = encodeArisAvailability(a);
-  auto back = decodeArisAvailability(bytes);
-  ASSERT_TRUE(back.ok()) << back.error().message;
-  EXPECT_EQ(*back, a);
-
-  std::vector<std::uint8_t> newer = bytes;
-  for (std::uint8_t b : {0x45, 0x00, 0x00, 0x2C, 0x42}) newer.push_back(b);  // field 8, fixed32: 43.0 degC
-  back = decodeArisAvailability(newer);
-  ASSERT_TRUE(back.ok()) << back.error().message;
-  EXPECT_EQ(*back, a);
-
-  std::vector<std::uint8_t> odd_type = bytes;
-  odd_type.push_back(0x10);  // field 2 (systemType) again: the last value wins
-  odd_type.push_back(0x07);
-  auto refused = decodeArisAvailability(odd_type);
-  ASSERT_FALSE(refused.ok());
-  EXPECT_TRUE(test::contains(refused.error().message, "systemType 7")) << refused.error().message;
-  std::vector<std::uint8_t> odd_state = bytes;
-  odd_state.push_back(0x20);  // field 4 (connectionState)
-  odd_state.push_back(0x02);
-  refused = decodeArisAvailability(odd_state);
-  ASSERT_FALSE(refused.ok());
-  EXPECT_TRUE(test::contains(refused.error().message, "connectionState 2")) << refused.error().message;
-  refused = decodeArisAvailability(std::vector<std::uint8_t>{0xFF, 0xFF, 0xFF});
-  ASSERT_FALSE(refused.ok());
-  EXPECT_TRUE(test::contains(refused.error().message, "not an Availability")) << refused.error().message;
 }
 
 }  // namespace

@@ -37,6 +37,34 @@ TEST(VehicleControlTest, ParsesEveryDeviceFaultAndUnplug) {
   EXPECT_EQ(parseControlCommand("status")->kind, ControlCommand::Kind::kStatus);
 }
 
+TEST(VehicleControlTest, ParsesArisCommands) {
+  for (const auto& [word, action] : {std::pair{"loss", ArisAction::kLoss}, std::pair{"dup", ArisAction::kDuplicate},
+                                     std::pair{"reorder", ArisAction::kReorder}}) {
+    auto c = parseControlCommand(std::string("aris ") + word + " 0.05");
+    ASSERT_TRUE(c.ok()) << word << ": " << c.error().message;
+    EXPECT_EQ(c->kind, ControlCommand::Kind::kAris);
+    EXPECT_EQ(c->aris_action, action);
+    EXPECT_DOUBLE_EQ(c->probability, 0.05);
+    EXPECT_STREQ(arisActionName(c->aris_action), word);
+  }
+  EXPECT_DOUBLE_EQ(parseControlCommand("aris loss 0")->probability, 0.0);
+  EXPECT_DOUBLE_EQ(parseControlCommand("aris dup 1")->probability, 1.0);
+  auto r = parseControlCommand("aris reboot 2.5");
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->aris_action, ArisAction::kReboot);
+  EXPECT_DOUBLE_EQ(r->seconds, 2.5);
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"aris", "usage: aris"},        {"aris loss", "usage: aris"},    {"aris jam 0.1", "unknown aris command 'jam'"},
+      {"aris loss 1.5", "got '1.5'"}, {"aris dup -0.1", "got '-0.1'"}, {"aris reorder nan", "got 'nan'"},
+      {"aris reboot 0", "got '0'"},
+  };
+  for (const auto& [line, expected] : bad) {
+    auto c = parseControlCommand(line);
+    ASSERT_FALSE(c.ok()) << line;
+    EXPECT_NE(c.error().message.find(expected), std::string::npos) << line << " -> " << c.error().message;
+  }
+}
+
 TEST(VehicleControlTest, BadLinesNameWhatIsWrong) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"", "empty command"},
@@ -104,10 +132,67 @@ TEST(EndpointsFileTest, RoundTripsEveryFieldAndLeavesNoTemporaryFile) {
   EXPECT_FALSE(r->depth_reading_is_absolute);
   EXPECT_EQ(r->imu_unix_seqpacket, e.imu_unix_seqpacket);
   EXPECT_EQ(r->imu_base_id, 0x180u);
+  EXPECT_EQ(r->sonar_kind, SonarKind::kFragments);
   EXPECT_EQ(r->sonar_port, 52102);
   EXPECT_EQ(r->backseat_port, 29500);
   EXPECT_EQ(r->control_socket, e.control_socket);
   EXPECT_EQ(simStampFromSteady(*r, e.steady_ns_at_sim_zero + 2'000'000'000), 25'000'000'000);
+}
+
+TEST(EndpointsFileTest, ArisSonarRoundTripsAndOldFilesReadAsFragments) {
+  test::TempDir dir("vog-endpoints");
+  const auto file = dir.path() / "endpoints.yaml";
+  VehicleEndpoints e;
+  e.sonar_kind = SonarKind::kAris;
+  e.sonar_command_port = 56888;
+  e.sonar_beacon_port = 56124;
+  e.sonar_serial_number = 1234;
+  ASSERT_TRUE(writeEndpointsFile(file, e).ok());
+  std::string text;
+  {
+    std::ifstream in(file);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  EXPECT_NE(text.find("kind: aris"), std::string::npos) << text;
+  auto r = readEndpointsFile(file);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->sonar_kind, SonarKind::kAris);
+  EXPECT_EQ(r->sonar_address, "127.0.0.1");
+  EXPECT_EQ(r->sonar_command_port, 56888);
+  EXPECT_EQ(r->sonar_beacon_port, 56124);
+  EXPECT_EQ(r->sonar_serial_number, 1234u);
+  {
+    std::string t = text;
+    t.replace(t.find("  serial_number: 1234\n"), 22, "");
+    std::ofstream(file) << t;
+    auto missing = readEndpointsFile(file);
+    ASSERT_FALSE(missing.ok());
+    EXPECT_NE(missing.error().message.find("missing key sonar.serial_number"), std::string::npos)
+        << missing.error().message;
+  }
+  {
+    std::string t = text;
+    t.replace(t.find("kind: aris"), 10, "kind: didson");
+    std::ofstream(file) << t;
+    auto unknown = readEndpointsFile(file);
+    ASSERT_FALSE(unknown.ok());
+    EXPECT_NE(unknown.error().message.find("sonar kind 'didson'"), std::string::npos) << unknown.error().message;
+  }
+
+  // A file written before sonar.kind existed: {address, port}.
+  VehicleEndpoints old;
+  old.sonar_port = 52102;
+  ASSERT_TRUE(writeEndpointsFile(file, old).ok());
+  {
+    std::ifstream in(file);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  text.replace(text.find("  kind: fragments\n"), 18, "");
+  std::ofstream(file) << text;
+  r = readEndpointsFile(file);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->sonar_kind, SonarKind::kFragments);
+  EXPECT_EQ(r->sonar_port, 52102);
 }
 
 TEST(EndpointsFileTest, MissingKeysAndWrongVersionAreNamed) {

@@ -11,6 +11,7 @@
 //                 52 WindowStart (f32, as set), 56 WindowLength (f32, as set), 436 PingMode,
 //                 452 SamplePeriod (u32 us), 464 SoundSpeed (f32 m/s), 468 SamplesPerBeam,
 //                 476 SampleStartDelay (u32 us), 516 ReorderedSamples (u32, 0 = sonar order),
+//                 520 Salinity (u32, parts per thousand: 0 fresh, 15 brackish, 35 salt),
 //                 680 AppliedSettings (u32, the cookie of the acoustic settings the frame was made
 //                 with: "cookie indices for command acknowledge", FrameHeader.fields.csv)
 // The live frame stream (aris_frame_assembler.hpp) sends the same header, unpadded.
@@ -46,6 +47,7 @@ struct ArisFrameMeta {
   std::uint32_t samples_per_beam = 0;   // SamplesPerBeam (0 in some files: SamplesPerChannel applies)
   float sound_speed_mps = 0.0f;         // SoundSpeed
   bool reordered_samples = false;       // ReorderedSamples: data already in beam/sample order
+  std::uint32_t salinity = 0;           // Salinity: parts per thousand (SET_SALINITY's value)
   std::uint32_t settings_cookie = 0;    // AppliedSettings: cookie of SetAcousticSettings in effect
 };
 
@@ -91,6 +93,7 @@ struct ArisHeaderOptions {
   std::uint32_t ping_mode = 1;        // must have the frame's beam count
   bool reordered_samples = true;      // ReorderedSamples: false when the data will be in sonar order
   std::uint32_t settings_cookie = 0;  // AppliedSettings
+  std::uint32_t salinity = 0;         // Salinity, parts per thousand (0 fresh, 15 brackish, 35 salt)
 };
 // The 1024-byte ARIS frame header of `frame`, as encodeArisFile writes it (same rounding and errors).
 Result<std::vector<std::uint8_t>> encodeArisFrameHeader(const SonarFrame& frame, const ArisHeaderOptions& options);

@@ -3,6 +3,9 @@
 // (sim/README.md "Control commands"):
 //   fault <device> garbage|truncate|badcrc|dropout <seconds>
 //   unplug <device> <seconds>
+//   aris loss|dup|reorder <probability>   (sonar kind aris: per-datagram link faults, in [0, 1])
+//   aris reboot <seconds>                 (sonar kind aris: the sonar forgets its settings and is
+//                                          silent for <seconds>)
 //   status
 // with <device> one of dvl, depth, imu, sonar, backseat and <seconds> simulated seconds in
 // (0, 3600]. Lines are answered with one line: "ok ..." or "error: ...".
@@ -26,12 +29,18 @@ constexpr int kDeviceCount = 5;
 const char* toString(Device device);
 const char* faultName(mock::Fault fault);  // the control word: garbage, truncate, badcrc, dropout
 
+// What an `aris` command does to the mock ARIS sonar.
+enum class ArisAction : std::uint8_t { kLoss, kDuplicate, kReorder, kReboot };
+const char* arisActionName(ArisAction action);  // the control word: loss, dup, reorder, reboot
+
 struct ControlCommand {
-  enum class Kind : std::uint8_t { kFault, kUnplug, kStatus };
+  enum class Kind : std::uint8_t { kFault, kUnplug, kAris, kStatus };
   Kind kind = Kind::kStatus;
   Device device = Device::kDvl;
-  mock::Fault fault = mock::Fault::kGarbage;  // kFault only
-  double seconds = 0.0;                       // simulated seconds (kFault, kUnplug)
+  mock::Fault fault = mock::Fault::kGarbage;   // kFault only
+  double seconds = 0.0;                        // simulated seconds (kFault, kUnplug, kAris kReboot)
+  ArisAction aris_action = ArisAction::kLoss;  // kAris only
+  double probability = 0.0;                    // kAris kLoss, kDuplicate, kReorder: in [0, 1]
 };
 
 // Parses one line (surrounding blanks ignored). Errors name the bad word and what was expected.

@@ -7,12 +7,21 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 
 #include "vog/core/result.hpp"
 
 namespace vog::vehicle {
+
+// How the simulated sonar is reached. kFragments: its frames as fragment datagrams (sonar_udp.hpp)
+// sent to sonar_address:sonar_port. kAris: a mock ARIS on the ARIS live protocol (PROTOCOLS.md) that
+// a client controls over TCP at sonar_address:sonar_command_port and that sends its frames where
+// the client asks.
+enum class SonarKind : std::uint8_t { kFragments, kAris };
+const char* toString(SonarKind kind);  // "fragments", "aris"
+Result<SonarKind> parseSonarKind(std::string_view text);
 
 struct VehicleEndpoints {
   int format_version = 1;
@@ -44,9 +53,16 @@ struct VehicleEndpoints {
   // IMU: can_frame records on the Unix-domain SOCK_SEQPACKET stand-in.
   std::string imu_unix_seqpacket;
   std::uint32_t imu_base_id = 0x180;
-  // Sonar: fragment datagrams (sonar_udp.hpp) sent to this address and port; port 0 = no sonar.
+  // Sonar. A file without sonar.kind is read as kFragments.
+  SonarKind sonar_kind = SonarKind::kFragments;
   std::string sonar_address = "127.0.0.1";
+  // kFragments: fragment datagrams (sonar_udp.hpp) sent to this port; 0 = no sonar.
   std::uint16_t sonar_port = 0;
+  // kAris: the command TCP port, the UDP port the Availability beacon goes to (0 = none) and the
+  // serial number the beacon announces.
+  std::uint16_t sonar_command_port = 0;
+  std::uint16_t sonar_beacon_port = 0;
+  std::uint32_t sonar_serial_number = 0;
   // Backseat TCP server.
   std::string backseat_address = "127.0.0.1";
   std::uint16_t backseat_port = 0;

@@ -5,8 +5,10 @@
 //   DVL    PD0 ensembles (bottom track, instrument frame) on a pseudo-terminal, 5 Hz
 //   depth  Digiquartz replies on a pseudo-terminal (P3 polled, or every sample after P4), 10 Hz
 //   IMU    CAN frames (drivers/imu/README.md) on the Unix-domain SOCK_SEQPACKET stand-in, 100 Hz
-//   sonar  intensity frames as fragment datagrams (sonar_udp.hpp) to 127.0.0.1:sonar_port, one
-//          rendered frame per ping, 5 Hz
+//   sonar  one rendered frame per ping, 5 Hz: with sonar_kind kFragments as fragment datagrams
+//          (sonar_udp.hpp) to 127.0.0.1:sonar_port; with kAris through a mock ARIS
+//          (mock::ArisSonarMock) that a client controls on the ARIS live protocol and that sends
+//          the frame its acoustic settings describe to the receiver the client names
 //   backseat  TCP server: $BFNVG + $BFNVR (the vehicle's navigation estimate) at nav_sentence_rate_hz;
 //          $BPGHP go-to-position commands acknowledged with $BFACK and followed; $BPSTS counted.
 // All rates are in simulated time.
@@ -27,7 +29,9 @@
 // Faults (control.hpp): `fault D kind s` gives every message of device D the fault for s simulated
 // seconds (a polled depth sensor may carry one armed fault into its next reply after the window);
 // `unplug D s` makes the device disappear (pty closed and link removed, server closed, sonar
-// silent) and return after s simulated seconds.
+// silent) and return after s simulated seconds. The ARIS sonar has its own faults instead
+// (`aris loss|dup|reorder P`, `aris reboot s`, applied at once); `fault sonar` and `unplug sonar`
+// are refused with it.
 //
 // Lifecycle: create() builds the simulation and opens every device (all listening); start()
 // fixes the time base (simulated 0 = now) and launches the simulation thread; stop() (or
@@ -48,6 +52,7 @@
 
 #include "vog/core/result.hpp"
 #include "vog/geometry/sonar.hpp"
+#include "vog/mock/aris_sonar_mock.hpp"
 #include "vog/vehicle/sim_wire.hpp"
 #include "vog/sim/lockstep.hpp"
 #include "vog/sim/world.hpp"
@@ -61,9 +66,16 @@ struct SimVehicleConfig {
   double duration_s = 0.0;              // simulated time limit, 0 = until stop()
   std::filesystem::path run_dir;        // existing folder for the pty links (dvl, depth) and imu.sock
   std::uint16_t backseat_port = 29500;  // PROTOCOLS.md default; 0 = any free port
-  std::uint16_t sonar_port = 52102;     // UDP destination on 127.0.0.1 (config/vogd.yaml default); 0 = off
-  double nav_sentence_rate_hz = 5.0;    // $BFNVG + $BFNVR
-  double origin_latitude_deg = 42.0;    // world (0, 0) for the backseat's positions
+  SonarKind sonar_kind = SonarKind::kFragments;
+  std::uint16_t sonar_port = 52102;  // kFragments: UDP destination on 127.0.0.1 (config/vogd.yaml default); 0 = off
+  // kAris: the mock ARIS's command TCP port on 127.0.0.1 (0 = any free; a real ARIS uses 56888), the
+  // UDP port on 127.0.0.1 its Availability beacon goes to (0 = no beacon; a real one: 56124) and its
+  // serial number.
+  std::uint16_t aris_command_port = 0;
+  std::uint16_t aris_beacon_port = 0;
+  std::uint32_t aris_serial_number = 1234;
+  double nav_sentence_rate_hz = 5.0;  // $BFNVG + $BFNVR
+  double origin_latitude_deg = 42.0;  // world (0, 0) for the backseat's positions
   double origin_longitude_deg = -71.0;
   double operating_margin_m = 5.0;  // accepted targets: the scene box grown by this
   double face_target_min_distance_m = 1.0;
@@ -87,9 +99,10 @@ struct VehicleSnapshot {
   std::uint64_t blocked_moves = 0;
   std::uint64_t scans = 0;  // sonar pings (each rendered and sent when the sonar is on)
   std::uint64_t dvl_sent = 0, imu_sent = 0, depth_sent = 0, nav_sentences_sent = 0;
-  double max_lag_ms = 0.0;         // worst wall-clock lateness of a step
-  double ping_step_ms_mean = 0.0;  // mean wall time of a step with a sonar ping (render + send)
-  bool finished = false;           // duration reached or stopped
+  std::optional<mock::ArisSonarMockStats> aris;  // sonar kind kAris only
+  double max_lag_ms = 0.0;                       // worst wall-clock lateness of a step
+  double ping_step_ms_mean = 0.0;                // mean wall time of a step with a sonar ping (render + send)
+  bool finished = false;                         // duration reached or stopped
 };
 
 // One simulated sample kept for comparison with what a receiver decoded.
