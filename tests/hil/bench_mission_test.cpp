@@ -97,9 +97,14 @@ class Bench {
     fs::create_directories(run);
     sonar_port_ = freeUdpPort();
     std::vector<std::string> args = {
-        VOGSIM_EXECUTABLE, "vehicle", "--scene", (vog::test::sourceDir() / "config/scenes/propeller.yaml").string(),
-        "--seed", "1", "--speedup", std::to_string(kSpeedup), "--run-dir", run.string(), "--backseat-port", "0",
-        "--control", (run / "control.sock").string(), "--no-stdin"};
+        VOGSIM_EXECUTABLE, "vehicle",
+        "--scene",         (vog::test::sourceDir() / "config/scenes/propeller.yaml").string(),
+        "--seed",          "1",
+        "--speedup",       std::to_string(kSpeedup),
+        "--run-dir",       run.string(),
+        "--backseat-port", "0",
+        "--control",       (run / "control.sock").string(),
+        "--no-stdin"};
     if (link_ == SonarLink::kAris) {
       // The mock ARIS: its command server on any port, its beacon to a port vogd listens on.
       args.insert(args.end(), {"--sonar-kind", "aris", "--aris-command-port", "0", "--aris-beacon-port",
@@ -134,8 +139,7 @@ class Bench {
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       << "  imu: {can_interface: \"\", unix_seqpacket: " << e.imu_unix_seqpacket << ", base_id: " << e.imu_base_id
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
-      << sonarConfig()
-      << "  backseat: {address: " << e.backseat_address << ", port: " << e.backseat_port
+      << sonarConfig() << "  backseat: {address: " << e.backseat_address << ", port: " << e.backseat_port
       << ", origin_latitude_deg: " << e.origin_latitude_deg << ", origin_longitude_deg: " << e.origin_longitude_deg
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       // Scheduling jitter of a shared machine is multiplied by the speed-up.
@@ -389,16 +393,18 @@ TEST(BenchMission, VogdOnAMockArisFindsItMapsThroughLossAndARebootAndReplays) {
 
   // The raw log is the capture: frames with the cookie sent, the commands of both connections, and
   // the duplicates the sonar was made to send.
-  const Vogctl decoded = b.run({VOGCTL_EXECUTABLE, "decode", "--format", "aris-stream", (b.dir() / "mission").string(),
-                                "--json"});
+  const Vogctl decoded =
+      b.run({VOGCTL_EXECUTABLE, "decode", "--format", "aris-stream", (b.dir() / "mission").string(), "--json"});
   ASSERT_EQ(decoded.status, 0) << decoded.out;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(decoded.out, m, std::regex("\"type\":\"summary\",\"datagrams\":([0-9]+),\"frames\":([0-9]+)")))
+  ASSERT_TRUE(
+      std::regex_search(decoded.out, m, std::regex("\"type\":\"summary\",\"datagrams\":([0-9]+),\"frames\":([0-9]+)")))
       << decoded.out.substr(0, 2000);
   EXPECT_GT(std::stol(m[2]), 100);
   EXPECT_TRUE(std::regex_search(decoded.out, m, std::regex("\"datagrams_duplicated\":([1-9][0-9]*)")));
   std::size_t acoustic = 0;
-  for (auto it = std::sregex_iterator(decoded.out.begin(), decoded.out.end(), std::regex("\"command\":\"SET_ACOUSTICS\",\"cookie\":1,"));
+  const std::regex set_acoustics("\"command\":\"SET_ACOUSTICS\",\"cookie\":1,");
+  for (auto it = std::sregex_iterator(decoded.out.begin(), decoded.out.end(), set_acoustics);
        it != std::sregex_iterator(); ++it)
     ++acoustic;
   EXPECT_GE(acoustic, 2u) << "one SET_ACOUSTICS per connection";

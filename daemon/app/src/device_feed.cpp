@@ -289,6 +289,7 @@ void DeviceFeed::onArisCommand(std::span<const std::uint8_t> bytes) {
     ++counter(DeviceId::kArisCommands).messages;
     if (const auto* acoustic = std::get_if<sonar::ArisAcousticSettings>(&*d.command)) {
       aris_cookie_sent_ = acoustic->cookie;
+      aris_cookie_received_ = 0;  // no frame yet since these were sent (the sonar may have rebooted)
     }
   }
   if (decoder.buffered() > 0) reject(DeviceId::kArisCommands, "a record ends inside a command");

@@ -196,7 +196,8 @@ struct DeviceSource::Impl {
       d += ", settings " + std::to_string(sent) + " applied";
     } else if (sent != 0) {
       const double waited_s = 1e-9 * static_cast<double>(t - aris_settings_sent_ns);
-      d += ", settings " + std::to_string(sent) + " sent, frames carry " + std::to_string(got);
+      d += ", settings " + std::to_string(sent) + " sent, " +
+           (got == 0 ? std::string("no frame since") : "frames carry " + std::to_string(got));
       if (waited_s > config.aris.settings_timeout_s) {
         d += ": the sonar has not taken the acoustic settings sent";
         state = api::DeviceState::kDegraded;

@@ -234,6 +234,12 @@ TEST(DeviceFeed, ArisFrameStreamGivesTheSameScansAndOnlyWithTheSettingsSent) {
   EXPECT_EQ(feed.arisFramesOtherSettings(), 3u);
   EXPECT_EQ(feed.lastDropReason(), "beam count");  // frame 50, after frames 10-12
   EXPECT_EQ(feed.counters(DeviceId::kArisCommands).messages, 1u);
+  // Settings sent again (a reconnection, perhaps to a rebooted sonar): no frame has shown them yet.
+  sonar::ArisAcousticSettings resent = sonar::deriveArisAcousticSettings({}).value().acoustic;
+  resent.cookie = kArisCookie;
+  FeedOutput none;
+  feed.feed(DeviceId::kArisCommands, 30'000 * kMs, sonar::encodeArisCommand(resent), none);
+  EXPECT_EQ(feed.arisCookieReceived(), 0u);
 
   ASSERT_EQ(run.scans.size(), 91u);  // 94 as over fragments, less frames 10-12
   std::size_t j = 0;

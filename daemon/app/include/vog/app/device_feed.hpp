@@ -136,7 +136,7 @@ class DeviceFeed {
   nav::NavSolution deadReckoning(std::int64_t now_ns) const { return dead_reckoning_.solution(now_ns); }
   bool aligned() const { return aligned_; }
   const sonar::ArisFrameAssemblerStats& arisFrames() const { return aris_assembler_.stats(); }
-  // The cookie of the last SET_ACOUSTICS sent, and of the last frame received (0: none yet).
+  // The cookie of the last SET_ACOUSTICS sent, and of the last frame received since (0: none yet).
   std::uint32_t arisCookieSent() const { return aris_cookie_sent_; }
   std::uint32_t arisCookieReceived() const { return aris_cookie_received_; }
   std::uint64_t arisFramesOtherSettings() const { return aris_frames_other_settings_; }
