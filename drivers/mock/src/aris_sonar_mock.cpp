@@ -77,13 +77,10 @@ void addSenderStats(ArisFrameSenderStats& sum, const ArisFrameSenderStats& s) {
   sum.acks_stale += s.acks_stale;
 }
 
-// The frame the acoustic settings describe, made from the simulator's frame `in` (beam order, any
-// beam count and window). Beams are taken by nearest centre (both fans span the same field of
-// view, beam 0 at -fov/2); each output sample is the maximum of the input samples overlapping its
-// range interval, so an echo's leading edge lands in the output sample that holds its range;
-// output samples outside the input window get `background`.
-sonar::SonarFrame settingsFrame(const sonar::SonarFrame& in, int beams, const sonar::ArisAcousticSettings& settings,
-                                double sound_speed_mps, std::uint8_t background) {
+}  // namespace
+
+sonar::SonarFrame arisSettingsFrame(const sonar::SonarFrame& in, int beams, const sonar::ArisAcousticSettings& settings,
+                                    double sound_speed_mps, std::uint8_t background) {
   const double half_c = sound_speed_mps / 2.0;
   sonar::SonarFrame out;
   out.n_beams = beams;
@@ -119,8 +116,6 @@ sonar::SonarFrame settingsFrame(const sonar::SonarFrame& in, int beams, const so
   }
   return out;
 }
-
-}  // namespace
 
 std::string_view arisPingSkipName(ArisPingSkip reason) { return kPingSkipNames[static_cast<std::size_t>(reason)]; }
 
@@ -581,7 +576,7 @@ Status ArisSonarMock::pingOnThread(const sonar::SonarFrame& frame, std::int64_t 
   // Acks that arrived before this ping may finish the previous frame: the sender gives a frame in
   // flight up when the next one is sent. Posted work (this ping) runs before the poll results.
   readAcks(now);
-  sonar::SonarFrame out = settingsFrame(frame, *beams, acoustics, config_.sound_speed_mps, config_.background);
+  sonar::SonarFrame out = arisSettingsFrame(frame, *beams, acoustics, config_.sound_speed_mps, config_.background);
   out.frame_index = next_frame_index_;
   out.stamp_ns = stamp_ns;
   auto datagrams = sender_->send(out,

@@ -122,6 +122,15 @@ struct ArisSonarMockStats {
   std::uint64_t skippedBy(ArisPingSkip r) const { return pings_skipped[static_cast<std::size_t>(r)]; }
 };
 
+// The frame the acoustic settings describe, made from the simulator's frame `in` (beam order, any
+// beam count and window): `beams` beams taken by nearest centre (both fans span the same field of
+// view, beam 0 at -fov/2); settings.samples_per_beam samples from SampleStartDelay c / 2, each
+// SamplePeriod c / 2 long, each the maximum of the input samples overlapping its range interval (so
+// an echo's leading edge lands in the output sample that holds its range); output samples outside
+// the input window get `background`. frame_index and stamp_ns are left 0.
+sonar::SonarFrame arisSettingsFrame(const sonar::SonarFrame& in, int beams, const sonar::ArisAcousticSettings& settings,
+                                    double sound_speed_mps, std::uint8_t background);
+
 // What the client has set and the sonar keeps.
 struct ArisMockSettings {
   bool connected = false;  // a client is in control
