@@ -111,7 +111,8 @@ struct DeviceSource::Impl {
     aris_commands = std::make_unique<io::TcpClient>(
         io, c, stampClock(), [](std::span<const std::uint8_t>, std::int64_t) {},  // the sonar sends nothing here
         [this](const io::DeviceHealth& h) {
-          if (h.state == io::LinkState::kConnected) sendArisSetup();
+          aris_setup_pending = h.state == io::LinkState::kConnected;
+          sendArisSetup();
         });
   }
 
@@ -122,8 +123,11 @@ struct DeviceSource::Impl {
     if (!std::holds_alternative<sonar::ArisPing>(command)) onChunk(DeviceId::kArisCommands, now(), bytes);
   }
 
-  // On every (re)connection: the date, the stream settings, the acoustic settings, the receiver.
+  // On every (re)connection: the date, the stream settings, the acoustic settings, the receiver;
+  // once the frame receiver is bound (its port goes to the sonar), so perhaps from a later tick.
   void sendArisSetup() {
+    if (!aris_setup_pending || sonar->localPort() == 0) return;
+    aris_setup_pending = false;
     sonar::ArisDerivedSettings settings = *aris_settings;
     aris_cookies.stamp(settings.acoustic);
     const std::string& receiver =
@@ -140,6 +144,7 @@ struct DeviceSource::Impl {
 
   void arisTick(std::int64_t t) {
     if (!aris_commands || aris_commands->health().state != io::LinkState::kConnected) return;
+    sendArisSetup();
     if (1e-9 * static_cast<double>(t - aris_ping_ns) < config.aris.keepalive_period_s) return;
     aris_ping_ns = t;
     sendAris(sonar::ArisPing{});
@@ -407,6 +412,7 @@ struct DeviceSource::Impl {
   std::optional<sonar::ArisAvailability> aris_identity;  // the newest beacon of our sonar
   std::uint64_t aris_beacons_refused = 0;
   std::string aris_beacon_error;
+  bool aris_setup_pending = false;  // connected, setup not sent yet
   std::int64_t aris_settings_sent_ns = 0;
   std::int64_t aris_ping_ns = 0;
 
