@@ -180,7 +180,7 @@ void ConfigMap::text(const std::string& key, std::string& field, bool required) 
   field = n->Scalar();
 }
 
-void ConfigMap::choice(const std::string& key, std::string& field, std::initializer_list<const char*> allowed) {
+void ConfigMap::choice(const std::string& key, std::string& field, std::span<const char* const> allowed) {
   auto n = get(key);
   if (!n) return;
   std::string list;

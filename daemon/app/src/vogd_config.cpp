@@ -164,13 +164,10 @@ void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& f
   readPort(m, "beacon_port", a.beacon_port, 0);
   m.text("receiver_address", a.receiver_address);
   sonar::ArisSonarConfig& c = a.sonar;
-  std::string model = c.model == sonar::ArisSystemType::k3000   ? "3000"
-                      : c.model == sonar::ArisSystemType::k1200 ? "1200"
-                                                                : "1800";
-  m.choice("model", model, {"1200", "1800", "3000"});
-  c.model = model == "3000"   ? sonar::ArisSystemType::k3000
-            : model == "1200" ? sonar::ArisSystemType::k1200
-                              : sonar::ArisSystemType::k1800;
+  m.enumeration("model", c.model,
+                {{"1200", sonar::ArisSystemType::k1200},
+                 {"1800", sonar::ArisSystemType::k1800},
+                 {"3000", sonar::ArisSystemType::k3000}});
   m.number("window_start_m", c.window_start_m, 0.0, 100.0);
   m.number("window_end_m", c.window_end_m, 0.0, 100.0);
   m.number("sound_speed_mps", c.sound_speed_mps, 1400.0, 1600.0);
@@ -178,28 +175,19 @@ void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& f
   m.unsignedInteger("ping_mode", ping_mode, 1, 9);
   c.ping_mode = static_cast<std::uint32_t>(ping_mode);
   m.number("frame_rate_hz", c.frame_rate_hz, sonar::kArisFrameRateMinHz, sonar::kArisFrameRateMaxHz);
-  std::string salinity = c.salinity == sonar::ArisSalinity::kSaltwater  ? "saltwater"
-                         : c.salinity == sonar::ArisSalinity::kBrackish ? "brackish"
-                                                                        : "fresh";
-  m.choice("salinity", salinity, {"fresh", "brackish", "saltwater"});
-  c.salinity = salinity == "saltwater"  ? sonar::ArisSalinity::kSaltwater
-               : salinity == "brackish" ? sonar::ArisSalinity::kBrackish
-                                        : sonar::ArisSalinity::kFresh;
-  std::string frequency = c.frequency == sonar::ArisFrequency::kLow ? "low" : "high";
-  m.choice("frequency", frequency, {"low", "high"});
-  c.frequency = frequency == "low" ? sonar::ArisFrequency::kLow : sonar::ArisFrequency::kHigh;
+  m.enumeration("salinity", c.salinity,
+                {{"fresh", sonar::ArisSalinity::kFresh},
+                 {"brackish", sonar::ArisSalinity::kBrackish},
+                 {"saltwater", sonar::ArisSalinity::kSaltwater}});
+  m.enumeration("frequency", c.frequency, {{"low", sonar::ArisFrequency::kLow}, {"high", sonar::ArisFrequency::kHigh}});
   std::uint64_t samples = c.samples_per_beam;
   m.unsignedInteger("samples_per_beam", samples, 0, sonar::kArisSamplesPerBeamMax);
   c.samples_per_beam = static_cast<std::uint32_t>(samples);
   m.number("range_resolution_m", c.range_resolution_m, 0.0, 1.0);
   m.number("receiver_gain_db", c.receiver_gain_db, 0.0, sonar::kArisReceiverGainMaxDb);
-  std::string mitigation = a.stream.packet_loss_mitigation == sonar::ArisPacketLossMitigation::kDropPartialFrames
-                               ? "drop_partial_frames"
-                               : "pessimistic_retry";
-  m.choice("packet_loss_mitigation", mitigation, {"pessimistic_retry", "drop_partial_frames"});
-  a.stream.packet_loss_mitigation = mitigation == "drop_partial_frames"
-                                        ? sonar::ArisPacketLossMitigation::kDropPartialFrames
-                                        : sonar::ArisPacketLossMitigation::kPessimisticRetry;
+  m.enumeration("packet_loss_mitigation", a.stream.packet_loss_mitigation,
+                {{"pessimistic_retry", sonar::ArisPacketLossMitigation::kPessimisticRetry},
+                 {"drop_partial_frames", sonar::ArisPacketLossMitigation::kDropPartialFrames}});
   m.number("keepalive_period_s", a.keepalive_period_s, 0.1, 10.0);
   m.number("settings_timeout_s", a.settings_timeout_s, 0.5, 60.0);
   m.number("max_frame_age_s", frames.max_frame_age_s, 0.1, 60.0);
@@ -244,9 +232,7 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   imu.finish();
   ConfigMap sonar = m.map("sonar");
   sonar.boolean("enabled", d.sonar_enabled);
-  std::string kind = d.sonar_kind == SonarKind::kAris ? "aris" : "fragments";
-  sonar.choice("kind", kind, {"fragments", "aris"});
-  d.sonar_kind = kind == "aris" ? SonarKind::kAris : SonarKind::kFragments;
+  sonar.enumeration("kind", d.sonar_kind, {{"fragments", SonarKind::kFragments}, {"aris", SonarKind::kAris}});
   sonar.text("bind_address", d.sonar.bind_address);
   readPort(sonar, "port", d.sonar.port, 0);
   readAris(sonar.map("aris"), d.aris, f.aris_frames);

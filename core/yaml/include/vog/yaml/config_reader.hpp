@@ -22,6 +22,8 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
+#include <span>
 #include <vector>
 
 namespace vog::yaml {
@@ -49,7 +51,24 @@ class ConfigMap {
   void unsignedInteger(const std::string& key, std::uint64_t& field, std::uint64_t min, std::uint64_t max);
   void boolean(const std::string& key, bool& field);
   void text(const std::string& key, std::string& field, bool required = false);
-  void choice(const std::string& key, std::string& field, std::initializer_list<const char*> allowed);
+  void choice(const std::string& key, std::string& field, std::initializer_list<const char*> allowed) {
+    choice(key, field, std::span<const char* const>(allowed.begin(), allowed.size()));
+  }
+  void choice(const std::string& key, std::string& field, std::span<const char* const> allowed);
+  // An enumeration named in the file by one of `names` (the same errors as choice()).
+  template <class E>
+  void enumeration(const std::string& key, E& field, std::initializer_list<std::pair<const char*, E>> names) {
+    std::vector<const char*> allowed;
+    std::string text;
+    for (const auto& [name, value] : names) {
+      allowed.push_back(name);
+      if (value == field) text = name;
+    }
+    choice(key, text, allowed);
+    for (const auto& [name, value] : names) {
+      if (text == name) field = value;
+    }
+  }
   void vector3(const std::string& key, Eigen::Vector3d& field, double min, double max);
   // Reports every key that no call asked for.
   void finish();
