@@ -24,6 +24,7 @@
 #include <functional>
 #include <optional>
 #include <regex>
+#include <set>
 #include <thread>
 
 namespace {
@@ -123,12 +124,13 @@ class Bench {
     return ::testing::AssertionSuccess();
   }
 
-  // vogd's configuration for the vehicle's endpoints (what an integrator writes for a real vehicle).
-  void writeVogdConfig() {
+  // vogd's configuration for the vehicle's endpoints (what an integrator writes for a real vehicle);
+  // aris_extra: more keys of devices.sonar.aris.
+  void writeVogdConfig(const std::string& file = "vogd.yaml", const std::string& aris_extra = "") {
     const auto& e = endpoints_;
     std::ofstream(dir() / "operator.secret") << kSecret << "\n";
     fs::permissions(dir() / "operator.secret", fs::perms::owner_read | fs::perms::owner_write);
-    std::ofstream y(dir() / "vogd.yaml");
+    std::ofstream y(dir() / file);
     y << "source: devices\n"
       << "mission:\n  max_submaps: 60\n"
       << "devices:\n  time_scale: " << kSpeedup << "\n"
@@ -139,7 +141,7 @@ class Bench {
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       << "  imu: {can_interface: \"\", unix_seqpacket: " << e.imu_unix_seqpacket << ", base_id: " << e.imu_base_id
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
-      << sonarConfig() << "  backseat: {address: " << e.backseat_address << ", port: " << e.backseat_port
+      << sonarConfig(aris_extra) << "  backseat: {address: " << e.backseat_address << ", port: " << e.backseat_port
       << ", origin_latitude_deg: " << e.origin_latitude_deg << ", origin_longitude_deg: " << e.origin_longitude_deg
       << ", reconnect: {initial_delay_ms: 50, max_delay_ms: 500}}\n"
       // Scheduling jitter of a shared machine is multiplied by the speed-up.
@@ -147,11 +149,12 @@ class Bench {
       << "api:\n  bind_address: 127.0.0.1\n  port: 0\n  secret_file: operator.secret\n";
   }
 
-  ::testing::AssertionResult startVogd() {
+  ::testing::AssertionResult startVogd(const std::string& config = "vogd.yaml",
+                                       const std::string& mission = "mission") {
     fs::remove(dir() / "port");
     vogd_ = std::make_unique<Subprocess>(
-        std::vector<std::string>{VOGD_EXECUTABLE, "--config", (dir() / "vogd.yaml").string(), "--mission-dir",
-                                 (dir() / "mission").string(), "--port-file", (dir() / "port").string()},
+        std::vector<std::string>{VOGD_EXECUTABLE, "--config", (dir() / config).string(), "--mission-dir",
+                                 (dir() / mission).string(), "--port-file", (dir() / "port").string()},
         std::vector<std::string>{}, dir() / "vogd.log");
     if (!vogd_->started()) return ::testing::AssertionFailure() << "vogd did not start";
     if (!waitUntil([&] { return fs::exists(dir() / "port"); }, 20.0))
@@ -208,14 +211,15 @@ class Bench {
   // The sonar's section: fragments on the port vogsim sends to, or the ARIS found by its beacon
   // (the serial number the endpoints name), its window matched to the simulated frame's 0.5-11 m
   // within the ARIS 1800's limits (a window from 0.7 m, 14.8 mm samples at most).
-  std::string sonarConfig() const {
+  std::string sonarConfig(const std::string& aris_extra) const {
     if (link_ == SonarLink::kFragments)
       return "  sonar: {bind_address: 127.0.0.1, port: " + std::to_string(sonar_port_) + "}\n";
     return "  sonar:\n    kind: aris\n    bind_address: 127.0.0.1\n    port: 0\n    aris:\n      beacon_port: " +
            std::to_string(sonar_port_) + "\n      serial_number: " + std::to_string(endpoints_.sonar_serial_number) +
            "\n      command_port: " + std::to_string(endpoints_.sonar_command_port) +
            "\n      window_start_m: 0.7\n      window_end_m: 11.0\n      samples_per_beam: 700\n"
-           "      reconnect: {initial_delay_ms: 50, max_delay_ms: 500}\n";
+           "      reconnect: {initial_delay_ms: 50, max_delay_ms: 500}\n" +
+           aris_extra;
   }
   // A device's detail in `vogctl status --json` ("" if it does not answer).
   std::string deviceDetail(const std::string& device) {
@@ -358,7 +362,7 @@ TEST(BenchMission, VogdOnAMockArisFindsItMapsThroughLossAndARebootAndReplays) {
       [&] {
         const std::string d = b.deviceDetail("sonar");
         return vog::test::contains(d, "ARIS 1800 serial " + std::to_string(b.endpoints().sonar_serial_number)) &&
-               vog::test::contains(d, "settings 1 applied");
+               std::regex_search(d, std::regex("settings [0-9]+ applied"));
       },
       30.0))
       << b.vogctl({"status"}).out << b.vogdLog();
@@ -378,7 +382,8 @@ TEST(BenchMission, VogdOnAMockArisFindsItMapsThroughLossAndARebootAndReplays) {
   ASSERT_TRUE(waitUntil([&] { return b.deviceState("sonar") == "disconnected"; }, 10.0)) << b.vogctl({"status"}).out;
   ASSERT_TRUE(waitUntil(
       [&] {
-        return b.deviceState("sonar") == "ok" && vog::test::contains(b.deviceDetail("sonar"), "settings 1 applied");
+        return b.deviceState("sonar") == "ok" &&
+               std::regex_search(b.deviceDetail("sonar"), std::regex("settings [0-9]+ applied"));
       },
       30.0))
       << b.vogctl({"status"}).out << b.vogdLog();
@@ -386,6 +391,22 @@ TEST(BenchMission, VogdOnAMockArisFindsItMapsThroughLossAndARebootAndReplays) {
   ASSERT_TRUE(waitUntil([&] { return b.statusField("n_submaps") > after_reboot; }, 90.0))
       << "no new submap after the sonar's reboot: " << b.vogctl({"status"}).out << b.vogdLog();
 
+  b.vogd().signal(SIGTERM);
+  ASSERT_EQ(b.vogd().wait(10.0), 0) << b.vogdLog();
+
+  // A vogd configured for another model (an ARIS 3000 in its 128-beam mode): the beacon says 1800,
+  // the sonar refuses the ping mode and keeps the settings of the run before, whose cookie the new
+  // run does not take for its own. Both show as a degraded sonar, and vogd keeps running.
+  b.writeVogdConfig("vogd-3000.yaml", "      model: \"3000\"\n      ping_mode: 9\n");
+  ASSERT_TRUE(b.startVogd("vogd-3000.yaml", "mission-3000"));
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        const std::string d = b.deviceDetail("sonar");
+        return b.deviceState("sonar") == "degraded" && vog::test::contains(d, "configured as an ARIS 3000") &&
+               vog::test::contains(d, "the sonar has not taken the acoustic settings sent");
+      },
+      30.0))
+      << b.vogctl({"status"}).out << b.vogdLog();
   b.vogd().signal(SIGTERM);
   ASSERT_EQ(b.vogd().wait(10.0), 0) << b.vogdLog();
   b.vogsim().signal(SIGTERM);
@@ -402,12 +423,17 @@ TEST(BenchMission, VogdOnAMockArisFindsItMapsThroughLossAndARebootAndReplays) {
       << decoded.out.substr(0, 2000);
   EXPECT_GT(std::stol(m[2]), 100);
   EXPECT_TRUE(std::regex_search(decoded.out, m, std::regex("\"datagrams_duplicated\":([1-9][0-9]*)")));
+  // One SET_ACOUSTICS per connection, the same settings with the same cookie.
+  std::set<std::string> cookies;
   std::size_t acoustic = 0;
-  const std::regex set_acoustics("\"command\":\"SET_ACOUSTICS\",\"cookie\":1,");
+  const std::regex set_acoustics("\"command\":\"SET_ACOUSTICS\",\"cookie\":([0-9]+),");
   for (auto it = std::sregex_iterator(decoded.out.begin(), decoded.out.end(), set_acoustics);
-       it != std::sregex_iterator(); ++it)
+       it != std::sregex_iterator(); ++it) {
     ++acoustic;
-  EXPECT_GE(acoustic, 2u) << "one SET_ACOUSTICS per connection";
+    cookies.insert((*it)[1]);
+  }
+  EXPECT_GE(acoustic, 2u);
+  EXPECT_EQ(cookies.size(), 1u);
 
   // Replayed from the raw log: every submap vogd closed, bit for bit.
   const Vogctl replay = b.run({VOGD_EXECUTABLE, "--config", (b.dir() / "vogd.yaml").string(), "--replay",

@@ -406,7 +406,9 @@ struct DeviceSource::Impl {
   // ARIS (kind aris): the command channel, the settings it sends and their cookies.
   std::unique_ptr<io::TcpClient> aris_commands;
   std::optional<sonar::ArisDerivedSettings> aris_settings;  // derived from the config at create()
-  sonar::ArisSettingsCookies aris_cookies;
+  // Counted from the start time: the sonar may still hold the settings of a vogd run before.
+  sonar::ArisSettingsCookies aris_cookies{sonar::arisFirstCookie(
+      std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count())};
   std::string aris_address;  // configured, or the beacon's sender
   std::unique_ptr<io::UdpReceiver> aris_beacon;
   std::optional<sonar::ArisAvailability> aris_identity;  // the newest beacon of our sonar

@@ -674,8 +674,15 @@ Result<ArisDerivedSettings> deriveArisAcousticSettings(const ArisSonarConfig& co
 void ArisSettingsCookies::stamp(ArisAcousticSettings& settings) {
   settings.cookie = last_.cookie;
   if (last_.cookie != 0 && settings == last_) return;
-  settings.cookie = last_.cookie == UINT32_MAX ? 1 : last_.cookie + 1;
+  settings.cookie = next_;
+  next_ = next_ == UINT32_MAX ? 1 : next_ + 1;
   last_ = settings;
+}
+
+std::uint32_t arisFirstCookie(std::int64_t unix_time_s) {
+  constexpr std::int64_t kSpan = (std::int64_t{1} << 31) - 1;
+  const std::int64_t folded = unix_time_s % kSpan;
+  return static_cast<std::uint32_t>((folded < 0 ? folded + kSpan : folded) + 1);
 }
 
 std::vector<ArisCommand> arisConnectCommands(const ArisDerivedSettings& settings,

@@ -492,6 +492,22 @@ TEST(ArisAcousticDerivation, CookieChangesExactlyWhenTheSettingsChange) {
   cookies.stamp(back);
   EXPECT_EQ(back.cookie, 3u);  // a change back is a change
   EXPECT_EQ(cookies.last(), 3u);
+
+  // A client started again counts from elsewhere, so the settings the sonar kept from the one
+  // before (cookie 1 to 3 here) are not taken for its own; the count wraps past 0.
+  ArisSettingsCookies restarted(arisFirstCookie(1'764'900'000));
+  auto c = deriveArisAcousticSettings(ArisSonarConfig{})->acoustic;
+  restarted.stamp(c);
+  EXPECT_EQ(c.cookie, arisFirstCookie(1'764'900'000));
+  EXPECT_NE(arisFirstCookie(1'764'900'000), arisFirstCookie(1'764'900'001));
+  EXPECT_GE(arisFirstCookie(0), 1u);
+  EXPECT_GE(arisFirstCookie(-5), 1u);
+  ArisSettingsCookies at_end(UINT32_MAX);
+  auto d = deriveArisAcousticSettings(ArisSonarConfig{})->acoustic;
+  at_end.stamp(d);
+  EXPECT_EQ(d.cookie, UINT32_MAX);
+  at_end.stamp(b);
+  EXPECT_EQ(b.cookie, 1u);
 }
 
 struct BadConfig {

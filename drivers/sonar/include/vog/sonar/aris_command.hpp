@@ -287,14 +287,23 @@ std::vector<ArisCommand> arisConnectCommands(const ArisDerivedSettings& settings
 // share a cookie); stamp() every SET_ACOUSTICS before sending it. Invariant: the cookie changes
 // exactly when the settings (other than the cookie) change; it is never 0, so frames made before
 // any stamped settings are told apart.
+// A sonar keeps its settings when its client goes away, so a client that starts again (a restarted
+// vogd) must not reuse the cookies of the one before: it starts its count at `first` (vogd: from
+// the wall clock, arisFirstCookie()).
 class ArisSettingsCookies {
  public:
+  explicit ArisSettingsCookies(std::uint32_t first = 1) : next_(first == 0 ? 1 : first) {}
   // Sets settings.cookie: the last one if the settings are those last stamped, the next otherwise.
   void stamp(ArisAcousticSettings& settings);
   std::uint32_t last() const { return last_.cookie; }
 
  private:
   ArisAcousticSettings last_{};  // last_.cookie == 0 until the first stamp
+  std::uint32_t next_;           // the cookie of the next distinct settings, never 0
 };
+
+// A first cookie that differs between runs of a client started at different seconds: the Unix time
+// in seconds, folded into [1, 2^31).
+std::uint32_t arisFirstCookie(std::int64_t unix_time_s);
 
 }  // namespace vog::sonar
