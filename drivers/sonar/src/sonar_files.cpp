@@ -42,8 +42,15 @@ constexpr std::size_t kFileSize = 424;
 }  // namespace aris
 
 // Classic DIDSON window lengths for high frequency (PROTOCOLS.md); low frequency doubles them.
-constexpr std::array<double, 4> kDidsonWindowLength_m = {1.125, 2.25, 4.5, 9.0};
-constexpr double kDidsonStartStep_m = 0.375;
+// DIDSON window lengths by index (drivers/sonar/README.md): the index is the frame's window length
+// code, plus 2 at low frequency. Classic windows of a standard DIDSON; a long-range (LR) DIDSON's
+// are twice these. Extended windows (ConfigFlags bit 0 clear) have their own table, whose first
+// entry the public readers do not agree on (0.83 or 1.25 m): it is refused.
+constexpr std::array<double, 6> kDidsonWindowLength_m = {1.125, 2.25, 4.5, 9.0, 18.0, 36.0};
+constexpr std::array<double, 6> kDidsonExtendedWindowLength_m = {0.0, 2.5, 5.0, 10.0, 20.0, 40.0};
+constexpr std::array<double, 6> kDidsonLongRangeExtendedWindowLength_m = {2.5, 5.0, 10.0, 20.0, 40.0, 70.0};
+constexpr double kDidsonStartStep_m = 0.375;          // classic windows, high frequency
+constexpr double kDidsonExtendedStartStep_m = 0.419;  // extended windows, high frequency
 constexpr int kDidsonSamples = 512;
 
 Result<std::int64_t> usToNs(std::uint64_t us) {
@@ -243,7 +250,7 @@ constexpr std::size_t kDdfFrameIndex = 0;
 constexpr std::size_t kDdfFrameTime = 4;
 constexpr std::size_t kDdfWindowStartCode = 52;
 constexpr std::size_t kDdfWindowLengthCode = 56;
-constexpr std::size_t kDdfSoundSpeed = 60;
+constexpr std::size_t kDdfConfigFlags = 192;  // bit 0: 1 classic, 0 extended windows; bit 1: long range
 constexpr std::size_t kDdfFileHighResolution = 12;
 
 }  // namespace
@@ -278,13 +285,23 @@ Result<SonarRecording> decodeDdfFile(std::span<const std::uint8_t> b, const Sona
     const std::string where = "DDF frame " + std::to_string(k);
     const std::uint32_t start_code = readU32LE(h, kDdfWindowStartCode);
     const std::uint32_t length_code = readU32LE(h, kDdfWindowLengthCode);
-    if (length_code >= kDidsonWindowLength_m.size()) {
+    if (length_code > 3) {
       return Error{where + ": window length code " + std::to_string(length_code) + " not in 0..3"};
     }
     if (start_code > 255) return Error{where + ": window start code " + std::to_string(start_code) + " above 255"};
-    const float c = readF32LE(h, kDdfSoundSpeed);
-    if (!std::isfinite(c) || (c != 0.0f && (c < 1000.0f || c > 2000.0f))) {
-      return Error{where + ": sound speed " + std::to_string(c) + " m/s outside [1000, 2000]"};
+    const std::uint32_t config_flags = readU32LE(h, kDdfConfigFlags) & 3U;
+    const bool classic = (config_flags & 1U) != 0;
+    const bool long_range = (config_flags & 2U) != 0;
+    const std::size_t length_index = length_code + (rec.high_frequency ? 0 : 2);
+    double length_m = 0.0;
+    if (classic) {
+      length_m = kDidsonWindowLength_m[length_index] * (long_range ? 2.0 : 1.0);
+    } else {
+      length_m = (long_range ? kDidsonLongRangeExtendedWindowLength_m : kDidsonExtendedWindowLength_m)[length_index];
+      if (length_m == 0.0) {
+        return Error{where + ": extended window length code 0 at high frequency (ConfigFlags " +
+                     std::to_string(config_flags) + "): its length is not known"};
+      }
     }
     const auto stamp = usToNs(readU64LE(h, kDdfFrameTime));
     if (!stamp.ok()) return Error{where + ": " + stamp.error().message};
@@ -293,9 +310,8 @@ Result<SonarRecording> decodeDdfFile(std::span<const std::uint8_t> b, const Sona
     f.frame_index = readU32LE(h, kDdfFrameIndex);
     f.n_beams = static_cast<int>(beams);
     f.n_samples = kDidsonSamples;
-    f.window_start_m = start_code * kDidsonStartStep_m * scale;
-    f.window_length_m = kDidsonWindowLength_m[length_code] * scale;
-    if (c != 0.0f) f.sound_speed_mps = static_cast<double>(c);
+    f.window_start_m = start_code * (classic ? kDidsonStartStep_m : kDidsonExtendedStartStep_m) * scale;
+    f.window_length_m = length_m;
     const auto data = b.subspan(pos + sizes->frame_header, data_bytes);
     f.samples.assign(data.begin(), data.end());
     rec.frames.push_back(std::move(f));
@@ -331,11 +347,13 @@ Result<std::vector<std::uint8_t>> encodeDdfFile(std::span<const SonarFrame> fram
     if (!(start_code >= 0.0 && start_code <= 255.0) || std::abs(start_code - std::round(start_code)) > 1e-6) {
       return Error{where + ": window start " + std::to_string(f.window_start_m) + " m is not a DIDSON start code"};
     }
-    std::size_t length_code = kDidsonWindowLength_m.size();
-    for (std::size_t i = 0; i < kDidsonWindowLength_m.size(); ++i) {
-      if (std::abs(kDidsonWindowLength_m[i] * scale - f.window_length_m) < 1e-9) length_code = i;
+    // Classic windows of a standard DIDSON: codes 0-3 index the table from 0 (high) or 2 (low).
+    const std::size_t first = high_frequency ? 0 : 2;
+    std::size_t length_code = 4;
+    for (std::size_t i = 0; i < 4; ++i) {
+      if (std::abs(kDidsonWindowLength_m[first + i] - f.window_length_m) < 1e-9) length_code = i;
     }
-    if (length_code == kDidsonWindowLength_m.size()) {
+    if (length_code == 4) {
       return Error{where + ": window length " + std::to_string(f.window_length_m) + " m is not a DIDSON window"};
     }
     if (f.stamp_ns < 0) return Error{where + ": negative stamp_ns"};
@@ -344,7 +362,7 @@ Result<std::vector<std::uint8_t>> encodeDdfFile(std::span<const SonarFrame> fram
     writeU64LE(h, kDdfFrameTime, static_cast<std::uint64_t>(f.stamp_ns / 1000));
     writeU32LE(h, kDdfWindowStartCode, static_cast<std::uint32_t>(std::lround(start_code)));
     writeU32LE(h, kDdfWindowLengthCode, static_cast<std::uint32_t>(length_code));
-    writeF32LE(h, kDdfSoundSpeed, static_cast<float>(f.sound_speed_mps));
+    writeU32LE(h, kDdfConfigFlags, 1U);  // classic windows, standard range
     out.insert(out.end(), h.begin(), h.begin() + static_cast<std::ptrdiff_t>(sizes->frame_header));
     out.insert(out.end(), f.samples.begin(), f.samples.end());
   }

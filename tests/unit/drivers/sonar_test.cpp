@@ -129,6 +129,64 @@ TEST(Ddf, RoundTripV3AndV4) {
   EXPECT_FALSE(encodeDdfFile(std::vector<SonarFrame>{odd}, 4).ok());
 }
 
+// A DDF v4 file laid out as the public readers read it (drivers/sonar/README.md): one frame of 96
+// beams with the given window codes, Threshold (offset 60) and ConfigFlags (offset 192).
+std::vector<std::uint8_t> publicLayoutDdf4(bool high_frequency, std::uint32_t start_code, std::uint32_t length_code,
+                                           std::uint32_t threshold, std::uint32_t config_flags) {
+  std::vector<std::uint8_t> b(1024 + 1024 + 96 * 512, 0);
+  auto put = [&](std::size_t at, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) b[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v >> (8 * i));
+  };
+  b[0] = 'D';
+  b[1] = 'D';
+  b[2] = 'F';
+  b[3] = 4;
+  put(4, 1);                        // numframes
+  put(8, 7);                        // framerate
+  put(12, high_frequency ? 1 : 0);  // resolution
+  put(16, 96);                      // numbeams
+  put(24, 512);                     // samplesperchannel
+  put(1024 + 0, 1);                 // framenumber
+  put(1024 + 52, start_code);       // windowstart
+  put(1024 + 56, length_code);      // windowlength
+  put(1024 + 60, threshold);        // threshold
+  put(1024 + 192, config_flags);    // configflags
+  return b;
+}
+
+TEST(Ddf, WindowsFollowThePublicLayout) {
+  // Classic windows (ConfigFlags 1), a threshold set: high frequency, start 4 x 0.375 m, 2.25 m.
+  auto rec = decodeDdfFile(publicLayoutDdf4(true, 4, 1, 20, 1));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  ASSERT_EQ(rec->frames.size(), 1u);
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_start_m, 1.5);
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 2.25);
+  // Low frequency: start steps of 0.75 m, lengths 4.5, 9, 18, 36 m for codes 0-3.
+  rec = decodeDdfFile(publicLayoutDdf4(false, 4, 0, 20, 1));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_start_m, 3.0);
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 4.5);
+  rec = decodeDdfFile(publicLayoutDdf4(false, 0, 3, 0, 1));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 36.0);
+  // A long-range DIDSON (bit 1): classic lengths doubled.
+  rec = decodeDdfFile(publicLayoutDdf4(true, 0, 1, 0, 3));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 4.5);
+  // Extended windows (bit 0 clear): 0.419 m start steps, their own lengths; code 0 at high
+  // frequency, on which the readers disagree, is refused by name.
+  rec = decodeDdfFile(publicLayoutDdf4(true, 4, 2, 0, 0));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_start_m, 4 * 0.419);
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 5.0);
+  rec = decodeDdfFile(publicLayoutDdf4(true, 4, 0, 0, 2));
+  ASSERT_TRUE(rec.ok()) << rec.error().message;
+  EXPECT_DOUBLE_EQ(rec->frames[0].window_length_m, 2.5);  // long range, extended
+  rec = decodeDdfFile(publicLayoutDdf4(true, 4, 0, 0, 0));
+  ASSERT_FALSE(rec.ok());
+  EXPECT_TRUE(test::contains(rec.error().message, "extended window length code 0")) << rec.error().message;
+}
+
 TEST(SonarUdp, FragmentsReassembleInAnyOrderAndLossDropsOnlyThatFrame) {
   const SonarFrame a = makeFrame(96, 512, 10, 8);
   const SonarFrame b = makeFrame(96, 512, 11, 9);

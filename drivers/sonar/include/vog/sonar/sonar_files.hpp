@@ -21,9 +21,13 @@
 // DIDSON DDF v3 / v4: "DDF" + version byte; file header 512 (v3) or 1024 (v4) bytes, frame header
 // 256 (v3) or 1024 (v4) bytes, then beams x 512 bytes sample-major. The file header shares the
 // ARIS prefix (4 FrameCount, 8 FrameRate, 12 HighResolution, 16 NumRawBeams); the frame header
-// carries 0 FrameIndex, 4 FrameTime (u64 us), 52 window start code (u32), 56 window length code
-// (u32, index into {1.125, 2.25, 4.5, 9} m), 60 sound speed (f32 m/s, 0 = unknown). Window start =
-// code * 0.375 m for high frequency; low frequency doubles start and length (PROTOCOLS.md).
+// carries 0 FrameIndex, 4 FrameTime (8 bytes, read as u64 us), 52 window start code (u32), 56
+// window length code (u32, 0..3), 192 ConfigFlags (bit 0 classic/extended windows, bit 1 long
+// range). Classic windows: length {1.125, 2.25, 4.5, 9} m for codes 0-3 at high frequency, {4.5, 9,
+// 18, 36} m at low frequency (doubled for a long-range DIDSON); start = code x 0.375 m (x 0.75 m at
+// low frequency). Extended windows: 0.419 m start steps and their own lengths. The layouts, the
+// public readers they were checked against and where those disagree: drivers/sonar/README.md. The
+// DDF frame header holds no sound speed (the windows are in metres): frames keep the nominal one.
 
 #include "vog/core/result.hpp"
 #include "vog/sonar/sonar_frame.hpp"
