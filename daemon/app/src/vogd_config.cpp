@@ -29,6 +29,14 @@ using yaml::ConfigReader;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// An unsigned integer field of any width, range-checked in [min, max] (which fit the field's type).
+template <class T>
+void readUnsigned(ConfigMap& m, const char* key, T& field, std::uint64_t min, std::uint64_t max) {
+  std::uint64_t v = field;
+  m.unsignedInteger(key, v, min, max);
+  field = static_cast<T>(v);
+}
+
 void readReconnect(ConfigMap m, io::ReconnectConfig& c) {
   m.integer("initial_delay_ms", c.initial_delay_ms, 1, 60'000);
   m.integer("max_delay_ms", c.max_delay_ms, 1, 3'600'000);
@@ -38,12 +46,9 @@ void readReconnect(ConfigMap m, io::ReconnectConfig& c) {
 
 void readSerial(ConfigMap& m, io::SerialConfig& c) {
   m.text("device", c.device_path);
-  std::uint64_t baud = c.baud;
-  m.unsignedInteger("baud", baud, 300, 4'000'000);
-  c.baud = static_cast<unsigned>(baud);
-  std::string parity = c.parity == io::Parity::kNone ? "none" : c.parity == io::Parity::kOdd ? "odd" : "even";
-  m.choice("parity", parity, {"none", "odd", "even"});
-  c.parity = parity == "none" ? io::Parity::kNone : parity == "odd" ? io::Parity::kOdd : io::Parity::kEven;
+  readUnsigned(m, "baud", c.baud, 300, 4'000'000);
+  m.enumeration("parity", c.parity,
+                {{"none", io::Parity::kNone}, {"odd", io::Parity::kOdd}, {"even", io::Parity::kEven}});
   m.integer("data_bits", c.data_bits, 5, 8);
   m.integer("stop_bits", c.stop_bits, 1, 2);
   m.boolean("exclusive", c.exclusive);
@@ -51,9 +56,7 @@ void readSerial(ConfigMap& m, io::SerialConfig& c) {
 }
 
 void readPort(ConfigMap& m, const char* key, std::uint16_t& port, std::uint64_t min) {
-  std::uint64_t p = port;
-  m.unsignedInteger(key, p, min, 65535);
-  port = static_cast<std::uint16_t>(p);
+  readUnsigned(m, key, port, min, 65535);
 }
 
 void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
@@ -157,9 +160,7 @@ void readNav(ConfigMap m, nav::DeadReckoningConfig& c) {
 
 void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& frames) {
   m.text("address", a.address);
-  std::uint64_t serial = a.serial_number;
-  m.unsignedInteger("serial_number", serial, 0, std::numeric_limits<std::uint32_t>::max());
-  a.serial_number = static_cast<std::uint32_t>(serial);
+  readUnsigned(m, "serial_number", a.serial_number, 0, std::numeric_limits<std::uint32_t>::max());
   readPort(m, "command_port", a.command_port, 1);
   readPort(m, "beacon_port", a.beacon_port, 0);
   m.text("receiver_address", a.receiver_address);
@@ -171,18 +172,14 @@ void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& f
   m.number("window_start_m", c.window_start_m, 0.0, 100.0);
   m.number("window_end_m", c.window_end_m, 0.0, 100.0);
   m.number("sound_speed_mps", c.sound_speed_mps, 1400.0, 1600.0);
-  std::uint64_t ping_mode = c.ping_mode;
-  m.unsignedInteger("ping_mode", ping_mode, 1, 9);
-  c.ping_mode = static_cast<std::uint32_t>(ping_mode);
+  readUnsigned(m, "ping_mode", c.ping_mode, 1, 9);
   m.number("frame_rate_hz", c.frame_rate_hz, sonar::kArisFrameRateMinHz, sonar::kArisFrameRateMaxHz);
   m.enumeration("salinity", c.salinity,
                 {{"fresh", sonar::ArisSalinity::kFresh},
                  {"brackish", sonar::ArisSalinity::kBrackish},
                  {"saltwater", sonar::ArisSalinity::kSaltwater}});
   m.enumeration("frequency", c.frequency, {{"low", sonar::ArisFrequency::kLow}, {"high", sonar::ArisFrequency::kHigh}});
-  std::uint64_t samples = c.samples_per_beam;
-  m.unsignedInteger("samples_per_beam", samples, 0, sonar::kArisSamplesPerBeamMax);
-  c.samples_per_beam = static_cast<std::uint32_t>(samples);
+  readUnsigned(m, "samples_per_beam", c.samples_per_beam, 0, sonar::kArisSamplesPerBeamMax);
   m.number("range_resolution_m", c.range_resolution_m, 0.0, 1.0);
   m.number("receiver_gain_db", c.receiver_gain_db, 0.0, sonar::kArisReceiverGainMaxDb);
   m.enumeration("packet_loss_mitigation", a.stream.packet_loss_mitigation,
@@ -191,9 +188,7 @@ void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& f
   m.number("keepalive_period_s", a.keepalive_period_s, 0.1, 10.0);
   m.number("settings_timeout_s", a.settings_timeout_s, 0.5, 60.0);
   m.number("max_frame_age_s", frames.max_frame_age_s, 0.1, 60.0);
-  std::uint64_t in_flight = frames.max_frames_in_flight;
-  m.unsignedInteger("max_frames_in_flight", in_flight, 1, 64);
-  frames.max_frames_in_flight = static_cast<std::size_t>(in_flight);
+  readUnsigned(m, "max_frames_in_flight", frames.max_frames_in_flight, 1, 64);
   readReconnect(m.map("reconnect"), a.reconnect);
   m.finish();
 }
@@ -201,14 +196,11 @@ void readAris(ConfigMap m, ArisLinkConfig& a, sonar::ArisFrameAssemblerConfig& f
 void readDevices(ConfigMap m, DevicesSection& d) {
   DeviceFeedConfig& f = d.feed;
   m.number("time_scale", d.time_scale, 0.01, 1000.0);
-  std::string navigation = f.navigation == NavigationSource::kBackseat ? "backseat" : "dead_reckoning";
-  m.choice("navigation", navigation, {"dead_reckoning", "backseat"});
-  f.navigation = navigation == "backseat" ? NavigationSource::kBackseat : NavigationSource::kDeadReckoning;
+  m.enumeration("navigation", f.navigation,
+                {{"dead_reckoning", NavigationSource::kDeadReckoning}, {"backseat", NavigationSource::kBackseat}});
   ConfigMap dvl = m.map("dvl");
   dvl.boolean("enabled", d.dvl_enabled);
-  std::string format = f.dvl_format == DvlFormat::kPd6 ? "pd6" : "pd0";
-  dvl.choice("format", format, {"pd0", "pd6"});
-  f.dvl_format = format == "pd6" ? DvlFormat::kPd6 : DvlFormat::kPd0;
+  dvl.enumeration("format", f.dvl_format, {{"pd0", DvlFormat::kPd0}, {"pd6", DvlFormat::kPd6}});
   readSerial(dvl, d.dvl);
   dvl.finish();
   ConfigMap depth = m.map("depth");
@@ -223,9 +215,7 @@ void readDevices(ConfigMap m, DevicesSection& d) {
   imu.boolean("enabled", d.imu_enabled);
   imu.text("can_interface", d.imu.interface);
   imu.text("unix_seqpacket", d.imu.unix_seqpacket);
-  std::uint64_t base_id = f.imu.base_id;
-  imu.unsignedInteger("base_id", base_id, 0, 0x7FC);
-  f.imu.base_id = static_cast<canid_t>(base_id);
+  readUnsigned(imu, "base_id", f.imu.base_id, 0, 0x7FC);
   readReconnect(imu.map("reconnect"), d.imu.reconnect);
   if (!d.imu.interface.empty() && !d.imu.unix_seqpacket.empty())
     imu.fail("unix_seqpacket", "give either can_interface or unix_seqpacket, not both");
@@ -277,9 +267,7 @@ void readDevices(ConfigMap m, DevicesSection& d) {
 // The bounds of limits.hpp for the field types of ApiServerConfig.
 template <class T>
 void readCount(ConfigMap& m, const char* key, T& field, api::Range<std::uint64_t> range) {
-  std::uint64_t v = field;
-  m.unsignedInteger(key, v, range.min, range.max);
-  field = static_cast<T>(v);
+  readUnsigned(m, key, field, range.min, range.max);
 }
 
 void readInt(ConfigMap& m, const char* key, int& field, api::Range<std::int64_t> range) {

@@ -33,6 +33,15 @@ namespace {
 
 using namespace std::chrono_literals;
 
+// The endpoints file vogsim writes once every device listens (within 10 s).
+Result<VehicleEndpoints> waitForEndpoints(const std::filesystem::path& file) {
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (!std::filesystem::exists(file) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  if (!std::filesystem::exists(file)) return Error{"no endpoints file within 10 s"};
+  return readEndpointsFile(file);
+}
+
 TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
   test::TempDir dir("vog-vogsim");
   const auto endpoints_file = dir.path() / "endpoints.yaml";
@@ -44,11 +53,7 @@ TEST(VogsimProcessTest, EndpointsDevicesControlAndSigtermWithinTwoSeconds) {
       {}, dir.path() / "vogsim.log");
   ASSERT_TRUE(child.started());
 
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (!std::filesystem::exists(endpoints_file) && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(10ms);
-  ASSERT_TRUE(std::filesystem::exists(endpoints_file)) << "no endpoints file within 10 s";
-  auto e = readEndpointsFile(endpoints_file);
+  const auto e = waitForEndpoints(endpoints_file);
   ASSERT_TRUE(e.ok()) << e.error().message;
   EXPECT_EQ(e->pid, child.pid());
   EXPECT_EQ(e->seed, 3u);
@@ -163,11 +168,7 @@ TEST(VogsimProcessTest, ArisSonarKindSpeaksTheArisLiveProtocol) {
                           "--no-stdin"},
                          {}, dir.path() / "vogsim.log");
   ASSERT_TRUE(child.started());
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (!std::filesystem::exists(endpoints_file) && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(10ms);
-  ASSERT_TRUE(std::filesystem::exists(endpoints_file)) << "no endpoints file within 10 s";
-  auto e = readEndpointsFile(endpoints_file);
+  const auto e = waitForEndpoints(endpoints_file);
   ASSERT_TRUE(e.ok()) << e.error().message;
   EXPECT_EQ(e->sonar_kind, SonarKind::kAris);
   EXPECT_EQ(e->sonar_address, "127.0.0.1");
