@@ -1,5 +1,7 @@
 #include "vog/client/api_client.hpp"
 
+#include "vog/api/submap_transfer.hpp"
+
 #include "vog/api/auth.hpp"
 #include "vog/api/convert.hpp"
 #include "vog/api/dispatcher.hpp"
@@ -21,6 +23,11 @@ using asio::ip::tcp;
 using Clock = std::chrono::steady_clock;
 
 std::string ms(std::chrono::milliseconds d) { return std::to_string(d.count()) + " ms"; }
+
+bool isStream(v1::Envelope::BodyCase body) {
+  return body == v1::Envelope::kWaypoint || body == v1::Envelope::kPoseUpdate || body == v1::Envelope::kStatusUpdate ||
+         body == v1::Envelope::kGraphUpdate;
+}
 
 }  // namespace
 
@@ -221,6 +228,7 @@ Result<v1::Envelope> ApiClient::receive(std::chrono::milliseconds timeout) {
       const bool closed = ec == asio::error::eof || ec == asio::ssl::error::stream_truncated;
       return fail(closed ? std::string("the server closed the connection") : "receive failed: " + ec.message());
     }
+    bytes_received_ += n;
     impl_->decoder.feed(std::span<const std::uint8_t>(impl_->buf.data(), n));
   }
 }
@@ -231,7 +239,7 @@ Result<v1::Envelope> ApiClient::awaitResponse(std::uint64_t id) {
     if (!r) return r.error();
     v1::Envelope& e = *r;
     const auto body = e.body_case();
-    if (body == v1::Envelope::kWaypoint || body == v1::Envelope::kPoseUpdate || body == v1::Envelope::kStatusUpdate) {
+    if (isStream(body)) {
       if (streams_.size() >= config_.max_buffered_streams) {
         streams_.pop_front();
         ++dropped_streams_;
@@ -317,10 +325,12 @@ Result<api::Subscriptions> ApiClient::subscribe(const api::Subscriptions& subscr
   req.mutable_subscribe()->set_waypoints(subscriptions.waypoints);
   req.mutable_subscribe()->set_poses(subscriptions.poses);
   req.mutable_subscribe()->set_status(subscriptions.status);
+  req.mutable_subscribe()->set_graph(subscriptions.graph);
   auto r = call(std::move(req));
   if (!r) return r.error();
   if (!r->has_subscribed()) return Error{"subscribe: the server answered with another message"};
-  return api::Subscriptions{r->subscribed().waypoints(), r->subscribed().poses(), r->subscribed().status()};
+  return api::Subscriptions{r->subscribed().waypoints(), r->subscribed().poses(), r->subscribed().status(),
+                            r->subscribed().graph()};
 }
 
 Result<std::vector<api::SubmapInfo>> ApiClient::submaps() {
@@ -358,7 +368,7 @@ Result<std::string> ApiClient::configText() {
 
 namespace {
 
-// Index and count of a chunk of a chunked transfer (map.proto MapChunk, api.proto CloudChunk).
+// Index and count of a chunk of a chunked transfer (map.proto MapChunk, api.proto CloudChunk, SubmapChunk).
 struct ChunkHeader {
   std::uint32_t index = 0;
   std::uint32_t count = 0;
@@ -367,6 +377,7 @@ struct ChunkHeader {
 ChunkHeader chunkHeader(const v1::Envelope& e) {
   if (e.has_map_chunk()) return {e.map_chunk().chunk_index(), e.map_chunk().chunk_count()};
   if (e.has_cloud_chunk()) return {e.cloud_chunk().chunk_index(), e.cloud_chunk().chunk_count()};
+  if (e.has_submap_chunk()) return {e.submap_chunk().chunk_index(), e.submap_chunk().chunk_count()};
   return {};
 }
 
@@ -422,6 +433,30 @@ Status ApiClient::fetchMap(api::MapMirror& mirror, const ProgressFn& progress, s
       });
   if (!received.ok()) return received;
   return mirror.apply(combined);
+}
+
+Result<api::GraphUpdate> ApiClient::graph() {
+  v1::Envelope req;
+  req.mutable_get_graph();
+  auto r = call(std::move(req));
+  if (!r) return r.error();
+  if (!r->has_graph()) return Error{"get_graph: the server answered with another message"};
+  auto g = api::fromProto(r->graph());
+  if (!g) return g.error();
+  if (!g->full) return Error{"get_graph: the server answered with a partial update"};
+  return std::move(g).value();
+}
+
+Result<std::unique_ptr<map::LocalGrid>> ApiClient::fetchSubmap(std::uint32_t id, std::uint32_t max_bytes_per_chunk) {
+  v1::Envelope req;
+  req.mutable_get_submap()->set_id(id);
+  req.mutable_get_submap()->set_max_bytes_per_chunk(max_bytes_per_chunk);
+  api::SubmapAssembler assembler(id);
+  const Status received =
+      receiveChunks(std::move(req), "submap", v1::Envelope::kSubmapChunk,
+                    [&](v1::Envelope& e, std::uint32_t) { return assembler.take(e.submap_chunk()); });
+  if (!received.ok()) return received.error();
+  return assembler.finish();
 }
 
 Result<api::Cloud> ApiClient::cloud(const ProgressFn& progress) {
@@ -484,6 +519,11 @@ Result<StreamMessage> ApiClient::nextStream(std::chrono::milliseconds timeout) {
         if (!p) return p.error();
         return StreamMessage{*p};
       }
+      if (e.has_graph_update()) {
+        auto g = api::fromProto(e.graph_update());
+        if (!g) return g.error();
+        return StreamMessage{std::move(*g)};
+      }
       auto s = api::fromProto(e.status_update());
       if (!s) return s.error();
       return StreamMessage{std::move(*s)};
@@ -493,7 +533,7 @@ Result<StreamMessage> ApiClient::nextStream(std::chrono::milliseconds timeout) {
     auto r = receive(left);
     if (!r) return r.error();
     const auto body = r->body_case();
-    if (body == v1::Envelope::kWaypoint || body == v1::Envelope::kPoseUpdate || body == v1::Envelope::kStatusUpdate) {
+    if (isStream(body)) {
       streams_.push_back(std::move(*r));
     } else if (body == v1::Envelope::kError) {
       last_server_error_ = {r->error().code(), r->error().message()};

@@ -76,6 +76,9 @@ class BenchBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return map_; }
   std::vector<api::SubmapInfo> submaps() const override { return {}; }
+  // No pose graph and no grids: these clients never ask for them.
+  std::shared_ptr<const api::GraphState> graph() const override { return nullptr; }
+  std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t) const override { return nullptr; }
   std::shared_ptr<const api::ServedCloud> cloud() const override { return nullptr; }
   Result<api::MissionState> command(const api::MissionCommand& c) override {
     state_ = c.kind == api::MissionCommand::Kind::kPause ? api::MissionState::kPaused : api::MissionState::kExploring;

@@ -27,9 +27,14 @@ class FuzzBackend final : public api::ApiBackend {
     (void)grid->insertRays(Eigen::Vector3d::Zero(), beams);
     grid->finalize();
     merged_ = map::MergedMap::create(config).value();
+    grid_ = std::move(grid);
     map::SubmapEntry entry;
-    entry.grid = std::move(grid);
+    entry.grid = grid_;
     (void)merged_->add(entry);
+    auto graph = std::make_shared<api::GraphState>();
+    graph->version = 1;
+    graph->submaps.push_back({0, entry.T_world_submap});
+    graph_ = graph;
     snapshot_ = merged_->snapshot();
     auto cloud = std::make_shared<api::ServedCloud>();
     for (int i = 0; i < 100; ++i) cloud->points.push_back({Eigen::Vector3f(0.1f * static_cast<float>(i), 0, 0), {}});
@@ -42,6 +47,10 @@ class FuzzBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return snapshot_; }
   std::vector<api::SubmapInfo> submaps() const override { return {api::SubmapInfo{}}; }
+  std::shared_ptr<const api::GraphState> graph() const override { return graph_; }
+  std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t id) const override {
+    return id == 0 ? grid_ : nullptr;
+  }
   std::shared_ptr<const api::ServedCloud> cloud() const override { return cloud_; }
   Result<api::MissionState> command(const api::MissionCommand& c) override {
     if (c.kind == api::MissionCommand::Kind::kSetBox) VOG_FUZZ_CHECK(c.box.validate().ok());
@@ -51,6 +60,8 @@ class FuzzBackend final : public api::ApiBackend {
   std::string configText() const override { return "api: {}\n"; }
 
  private:
+  std::shared_ptr<const map::LocalGrid> grid_;
+  std::shared_ptr<const api::GraphState> graph_;
   std::unique_ptr<map::MergedMap> merged_;
   std::shared_ptr<const map::MergedMap> snapshot_;
   std::shared_ptr<const api::ServedCloud> cloud_;

@@ -2,6 +2,7 @@
 
 #include "vog/api/convert.hpp"
 #include "vog/api/framing.hpp"
+#include "vog/api/graph.hpp"
 #include "vog/api/limits.hpp"
 #include "vog/api/tls_context.hpp"
 
@@ -103,14 +104,15 @@ class AuthThrottle {
 using Session = ApiServer::Session;
 
 struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
-  Core(asio::io_context& io_in, ApiBackend& backend, ApiServerConfig config_in, ApiLogger* logger_in,
+  Core(asio::io_context& io_in, ApiBackend& backend_in, ApiServerConfig config_in, ApiLogger* logger_in,
        std::unique_ptr<NonceSource> nonces_in, std::unique_ptr<asio::ssl::context> tls_in)
       : io(io_in),
+        backend(backend_in),
         config(std::move(config_in)),
         logger(logger_in),
         nonces(std::move(nonces_in)),
         tls(std::move(tls_in)),
-        dispatcher(backend, *nonces, logger_in, config.dispatch),
+        dispatcher(backend_in, *nonces, logger_in, config.dispatch),
         acceptor(io_in),
         accept_retry(io_in) {}
 
@@ -137,6 +139,7 @@ struct ApiServer::Core : std::enable_shared_from_this<ApiServer::Core> {
   }
 
   asio::io_context& io;
+  ApiBackend& backend;  // graph() for the graph stream; the dispatcher answers requests from it
   const ApiServerConfig config;
   ApiLogger* logger;
   std::unique_ptr<NonceSource> nonces;
@@ -271,6 +274,14 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
     pump();
   }
 
+  // The graph changed: this session gets what it lacks when its turn to write comes (one update that
+  // spans every version it missed, so nothing is dropped and no resynchronisation is needed).
+  void pushGraph() {
+    if (closing_ || !state_.subscriptions.graph) return;
+    graph_pending_ = true;
+    pump();
+  }
+
   void pushStatus(const StatusUpdate& s) {
     if (closing_ || !state_.subscriptions.status) return;
     if (status_) {
@@ -382,7 +393,7 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
   std::size_t queuedBytes() const { return response_bytes_ + out_.size(); }
   bool subscribed() const {
     const Subscriptions& s = state_.subscriptions;
-    return s.waypoints || s.poses || s.status;
+    return s.waypoints || s.poses || s.status || s.graph;
   }
   bool busy() const { return writing_ || !responses_.empty() || !transfers_.empty(); }
 
@@ -487,7 +498,12 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
         return;
       }
     }
+    const bool had_graph = state_.subscriptions.graph;
     Reply reply = core_->dispatcher.handle(request, state_);
+    if (request.has_subscribe() && state_.subscriptions.graph != had_graph) {
+      graph_sent_.reset();  // a new subscription starts with a full update
+      graph_pending_ = state_.subscriptions.graph;
+    }
     if (authenticating) {
       if (state_.role == Role::kOperator) {
         core_->auth_throttle.succeeded(address_);
@@ -583,6 +599,17 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
         v1::Envelope e;
         toProto(s, *e.mutable_status_update());
         appendStream(e);
+        continue;
+      }
+      if (graph_pending_) {
+        graph_pending_ = false;
+        std::shared_ptr<const GraphState> now = core_->backend.graph();
+        if (now && (!graph_sent_ || graph_sent_->version != now->version)) {
+          v1::Envelope e;
+          toProto(graphUpdate(graph_sent_.get(), *now), *e.mutable_graph_update());
+          appendStream(e);
+          graph_sent_ = std::move(now);
+        }
         continue;
       }
       if (!transfers_.empty()) {
@@ -703,6 +730,8 @@ class ApiServer::Session : public std::enable_shared_from_this<ApiServer::Sessio
   std::deque<Waypoint> waypoints_;
   std::optional<PoseUpdate> pose_;
   std::optional<StatusUpdate> status_;
+  bool graph_pending_ = false;                    // the graph changed since graph_sent_
+  std::shared_ptr<const GraphState> graph_sent_;  // what this client holds (null: nothing yet)
   std::uint64_t dropped_waypoints_ = 0;
   std::uint64_t dropped_poses_ = 0;
   std::uint64_t dropped_status_ = 0;
@@ -921,6 +950,12 @@ void ApiServer::publishStatus(const StatusReport& status) {
   auto update = std::make_shared<const StatusUpdate>(StatusUpdate{++core_->status_seq, status, 0});
   asio::post(core_->io, [core = core_, update] {
     for (auto& s : core->sessionList()) s->pushStatus(*update);
+  });
+}
+
+void ApiServer::publishGraph() {
+  asio::post(core_->io, [core = core_] {
+    for (auto& s : core->sessionList()) s->pushGraph();
   });
 }
 

@@ -9,6 +9,19 @@ namespace vog::api {
 
 namespace {
 
+void boxToProto(const ExplorationBox& box, v1::Box& out) {
+  out.set_min_x_m(box.min_world_m.x());
+  out.set_min_y_m(box.min_world_m.y());
+  out.set_min_z_m(box.min_world_m.z());
+  out.set_max_x_m(box.max_world_m.x());
+  out.set_max_y_m(box.max_world_m.y());
+  out.set_max_z_m(box.max_world_m.z());
+}
+
+ExplorationBox boxFromProto(const v1::Box& b) {
+  return {{b.min_x_m(), b.min_y_m(), b.min_z_m()}, {b.max_x_m(), b.max_y_m(), b.max_z_m()}};
+}
+
 std::string unknownEnum(std::string_view what, int value) {
   return "unknown " + std::string(what) + " value " + std::to_string(value);
 }
@@ -206,6 +219,12 @@ void toProto(const StatusReport& status, v1::StatusReport& out) {
   out.set_n_closures(status.n_closures);
   out.set_planner_state(toProto(status.planner_state));
   out.set_map_version(status.map_version);
+  out.set_graph_version(status.graph_version);
+  if (status.box) {
+    boxToProto(*status.box, *out.mutable_box());
+  } else {
+    out.clear_box();
+  }
 }
 
 Result<StatusReport> fromProto(const v1::StatusReport& status) {
@@ -230,6 +249,12 @@ Result<StatusReport> fromProto(const v1::StatusReport& status) {
   if (!planner) return planner.error();
   out.planner_state = *planner;
   out.map_version = status.map_version();
+  out.graph_version = status.graph_version();
+  if (status.has_box()) {
+    const ExplorationBox box = boxFromProto(status.box());
+    if (auto st = box.validate(); !st) return Error{"status.box: " + st.error().message};
+    out.box = box;
+  }
   return out;
 }
 
@@ -299,13 +324,7 @@ void toProto(const MissionCommand& command, v1::MissionCommand& out) {
     case MissionCommand::Kind::kReturnHome: out.set_kind(v1::MissionCommand::KIND_RETURN_HOME); break;
   }
   if (command.kind == MissionCommand::Kind::kSetBox) {
-    auto* box = out.mutable_box();
-    box->set_min_x_m(command.box.min_world_m.x());
-    box->set_min_y_m(command.box.min_world_m.y());
-    box->set_min_z_m(command.box.min_world_m.z());
-    box->set_max_x_m(command.box.max_world_m.x());
-    box->set_max_y_m(command.box.max_world_m.y());
-    box->set_max_z_m(command.box.max_world_m.z());
+    boxToProto(command.box, *out.mutable_box());
   }
 }
 
@@ -322,9 +341,7 @@ Result<MissionCommand> fromProto(const v1::MissionCommand& command) {
   }
   if (out.kind == MissionCommand::Kind::kSetBox) {
     if (!command.has_box()) return Error{"mission_command.box is required for set-box"};
-    const auto& b = command.box();
-    out.box.min_world_m = {b.min_x_m(), b.min_y_m(), b.min_z_m()};
-    out.box.max_world_m = {b.max_x_m(), b.max_y_m(), b.max_z_m()};
+    out.box = boxFromProto(command.box());
     if (Status s = out.box.validate(); !s.ok()) return Error{"mission_command." + s.error().message};
   }
   return out;

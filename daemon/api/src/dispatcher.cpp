@@ -2,7 +2,9 @@
 
 #include "vog/api/convert.hpp"
 #include "vog/api/framing.hpp"
+#include "vog/api/graph.hpp"
 #include "vog/api/map_delta.hpp"
+#include "vog/api/submap_transfer.hpp"
 #include "vog/v1/map.pb.h"
 
 #include <algorithm>
@@ -183,7 +185,8 @@ Reply Dispatcher::handle(const v1::Envelope& request, SessionState& session) {
   const B body = request.body_case();
   const bool is_request = body == B::kHello || body == B::kChallengeResponse || body == B::kGetStatus ||
                           body == B::kSubscribe || body == B::kGetMap || body == B::kListSubmaps ||
-                          body == B::kGetCloud || body == B::kMissionCommand || body == B::kGetConfig;
+                          body == B::kGetCloud || body == B::kMissionCommand || body == B::kGetConfig ||
+                          body == B::kGetGraph || body == B::kGetSubmap;
   if (!is_request) {
     const std::string what =
         body == B::BODY_NOT_SET
@@ -205,12 +208,13 @@ Reply Dispatcher::handle(const v1::Envelope& request, SessionState& session) {
     }
     case B::kSubscribe: {
       const auto& s = request.subscribe();
-      session.subscriptions = {s.waypoints(), s.poses(), s.status()};
+      session.subscriptions = {s.waypoints(), s.poses(), s.status(), s.graph()};
       v1::Envelope out;
       out.set_request_id(id);
       out.mutable_subscribed()->set_waypoints(s.waypoints());
       out.mutable_subscribed()->set_poses(s.poses());
       out.mutable_subscribed()->set_status(s.status());
+      out.mutable_subscribed()->set_graph(s.graph());
       return single(std::move(out));
     }
     case B::kGetMap: return map(id, request.get_map());
@@ -225,6 +229,18 @@ Reply Dispatcher::handle(const v1::Envelope& request, SessionState& session) {
       return single(std::move(out));
     }
     case B::kGetCloud: return cloud(id, request.get_cloud());
+    case B::kGetGraph: {
+      const std::shared_ptr<const GraphState> graph = backend_.graph();
+      if (!graph) return errorReply(id, v1::ERROR_CODE_UNAVAILABLE, "no pose graph yet (no closed submap)");
+      v1::Envelope out;
+      out.set_request_id(id);
+      toProto(graphUpdate(nullptr, *graph), *out.mutable_graph());
+      if (out.ByteSizeLong() > config_.max_frame_bytes) {
+        return errorReply(id, v1::ERROR_CODE_INTERNAL, "the pose graph exceeds the maximum frame size");
+      }
+      return single(std::move(out));
+    }
+    case B::kGetSubmap: return submap(id, request.get_submap());
     case B::kMissionCommand: return command(id, request.mission_command(), session);
     case B::kGetConfig: {
       v1::Envelope out;
@@ -238,6 +254,28 @@ Reply Dispatcher::handle(const v1::Envelope& request, SessionState& session) {
     default: break;
   }
   return errorReply(id, v1::ERROR_CODE_INTERNAL, "request not handled");
+}
+
+Reply Dispatcher::submap(std::uint64_t id, const v1::GetSubmap& request) {
+  std::uint32_t slice = request.max_bytes_per_chunk() == 0 ? kDefaultSubmapSliceBytes : request.max_bytes_per_chunk();
+  // A slice that does not compress still fits a frame: zlib adds at most about 0.1 % and 13 bytes.
+  const std::uint64_t frame_room = config_.max_frame_bytes > 2 * kChunkHeaderReserveBytes
+                                       ? (config_.max_frame_bytes - 2 * kChunkHeaderReserveBytes) * 999 / 1000
+                                       : 0;
+  const std::uint64_t max_slice = std::min<std::uint64_t>(kMaxSubmapSliceBytes, frame_room);
+  if (slice > max_slice) {
+    return errorReply(id, v1::ERROR_CODE_INVALID_ARGUMENT,
+                      "get_submap.max_bytes_per_chunk " + std::to_string(slice) + " is above " +
+                          std::to_string(max_slice) + " (the frame size allows no more)");
+  }
+  std::shared_ptr<const map::LocalGrid> grid = backend_.submapGrid(request.id());
+  if (!grid) {
+    return errorReply(id, v1::ERROR_CODE_INVALID_ARGUMENT,
+                      "get_submap.id " + std::to_string(request.id()) + " is not a closed submap");
+  }
+  Reply r;
+  r.chunks = makeSubmapChunks(id, request.id(), std::move(grid), slice);
+  return r;
 }
 
 Reply Dispatcher::hello(std::uint64_t id, const v1::Hello& hello, SessionState& session) {

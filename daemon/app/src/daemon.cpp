@@ -499,6 +499,7 @@ Status Daemon::run() {
   watchdog.add(
       "source", [this] { return source_->heartbeat(); }, t_start);
   Clock::time_point last_ping{}, last_status{}, last_pose{};
+  std::uint64_t graph_published = 0;
   while (true) {
     {
       std::unique_lock lock(stop_mutex_);
@@ -525,6 +526,10 @@ Status Daemon::run() {
       for (const map::MergeRecord& m : merges) telemetry_->merge(stamp_ns, m);
     }
     cloud_.update(merge_->snapshot());  // only when a client asked for a cloud since
+    if (const auto graph = mapping_->state()->graph; graph && graph->version != graph_published) {
+      api_->publishGraph();
+      graph_published = graph->version;
+    }
     if (now - last_pose >= std::chrono::milliseconds(200)) {
       api::PoseUpdate p;
       {
@@ -582,6 +587,9 @@ api::StatusReport Daemon::status() const {
   s.sigma_yaw_rad = odometry_.sigma_yaw_rad;
   s.n_submaps = static_cast<std::uint32_t>(mapped->submaps.size());
   s.n_closures = mapped->n_closures;
+  s.graph_version = mapped->graph ? mapped->graph->version : 0;
+  if (const std::optional<mission::Box>& box = mission_.box())
+    s.box = api::ExplorationBox{box->min_world_m, box->max_world_m};
   s.planner_state = planner_state_;
   if (auto snap = merge_->snapshot()) s.map_version = snap->version();
   return s;
@@ -590,6 +598,15 @@ api::StatusReport Daemon::status() const {
 std::shared_ptr<const map::MergedMap> Daemon::mapSnapshot() const { return merge_->snapshot(); }
 
 std::vector<api::SubmapInfo> Daemon::submaps() const { return mapping_->state()->submaps; }
+
+std::shared_ptr<const api::GraphState> Daemon::graph() const { return mapping_->state()->graph; }
+
+std::shared_ptr<const map::LocalGrid> Daemon::submapGrid(std::uint32_t id) const {
+  const std::shared_ptr<const MappingState> mapped = mapping_->state();
+  const auto it = std::lower_bound(mapped->entries.begin(), mapped->entries.end(), id,
+                                   [](const map::SubmapEntry& e, std::uint32_t key) { return e.id < key; });
+  return it != mapped->entries.end() && it->id == id ? it->grid : nullptr;
+}
 
 std::shared_ptr<const api::ServedCloud> Daemon::cloud() const { return cloud_.latest(); }
 

@@ -1,5 +1,6 @@
 #include "vog/app/mapping_stage.hpp"
 
+#include "vog/api/graph.hpp"
 #include "vog/app/scan_record.hpp"
 
 #include <spdlog/spdlog.h>
@@ -121,6 +122,24 @@ Status MappingStage::persist(const slam::MappingUpdate& update) {
   return {};
 }
 
+std::shared_ptr<const api::GraphState> MappingStage::graphOf(const MappingState& s) {
+  auto g = std::make_shared<api::GraphState>();
+  g->submaps.reserve(s.entries.size());
+  for (const map::SubmapEntry& e : s.entries) g->submaps.push_back({e.id, e.T_world_submap});
+  g->closures.reserve(s.closure_pairs.size());
+  for (const slam::ClosurePair& c : s.closure_pairs)
+    g->closures.push_back({static_cast<std::uint32_t>(c.from), static_cast<std::uint32_t>(c.to)});
+  if (!s.records.empty()) g->stamp_ns = s.records.back().last_stamp_ns;
+  // Unchanged (a publication without a new submap or a moved pose) keeps the version.
+  const std::shared_ptr<const MappingState> before = state();
+  if (before && before->graph && api::graphUpdate(before->graph.get(), *g).submaps.empty() &&
+      before->graph->closures.size() == g->closures.size() && before->graph->submaps.size() == g->submaps.size()) {
+    return before->graph;
+  }
+  g->version = ++graph_version_;
+  return g;
+}
+
 void MappingStage::publish() {
   auto s = std::make_shared<MappingState>();
   for (const slam::SubmapRecord& r : pipeline_->submaps()) {
@@ -134,7 +153,9 @@ void MappingStage::publish() {
     s->submaps.push_back(i);
   }
   s->records = pipeline_->submaps();
+  s->entries = pipeline_->map().entries();
   s->closure_pairs = slam::closurePairs(pipeline_->closures());
+  s->graph = graphOf(*s);
   s->n_closures = static_cast<std::uint32_t>(pipeline_->closures().size());
   if (!pipeline_->submaps().empty()) {
     const slam::SubmapRecord& r = pipeline_->submaps().back();

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cassert>
 #include <bit>
+#include <sstream>
 #include <unordered_map>
 
 namespace vog::map {
@@ -77,6 +78,15 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, con
   std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(ot_file.string()));
   auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
   if (tree == nullptr) return Error{"cannot read an OcTree from " + ot_file.string()};
+  any.release();
+  return fromTree(config, std::unique_ptr<octomap::OcTree>(tree));
+}
+
+Result<std::unique_ptr<LocalGrid>> LocalGrid::deserialize(const GridConfig& config, std::string_view ot_bytes) {
+  std::istringstream in{std::string(ot_bytes)};
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
+  auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
+  if (tree == nullptr) return Error{"the bytes are not an OctoMap .ot file of an OcTree"};
   any.release();
   return fromTree(config, std::unique_ptr<octomap::OcTree>(tree));
 }

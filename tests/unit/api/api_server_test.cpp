@@ -15,6 +15,7 @@
 
 #include <condition_variable>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -861,6 +862,125 @@ TEST_F(ApiServerTest, VogctlStatusWatchAndSnapshot) {
   EXPECT_EQ(watch_rc, 0);
   EXPECT_EQ(std::count(watch_out.begin(), watch_out.end(), '\n'), 2) << watch_out;
   EXPECT_NE(watch_out.find("\"stream\":\"waypoint\""), std::string::npos) << watch_out;
+}
+
+}  // namespace
+}  // namespace vog::api
+
+// ------------------------------------------------------------------ the VOG-Map as submaps (GetSubmap, graph)
+
+namespace vog::api {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Waits for graph updates until `held` reaches the backend's graph version; every update must apply.
+void followGraph(ApiClient& c, GraphState& held, std::uint64_t until_version, std::size_t* moved = nullptr) {
+  while (held.version < until_version) {
+    auto m = c.nextStream(5s);
+    ASSERT_TRUE(m.ok()) << m.error().message;
+    const auto* u = std::get_if<GraphUpdate>(&*m);
+    if (u == nullptr) continue;
+    if (moved != nullptr && !u->full) *moved += u->submaps.size();
+    const Status st = applyGraphUpdate(held, *u);
+    ASSERT_TRUE(st.ok()) << st.error().message;
+  }
+}
+
+// Merges fetched grids at the held poses, as a topside mirror does (re-merge tolerance 0).
+void mergeMirror(map::MergedMap& merged, const std::map<std::uint32_t, std::shared_ptr<const map::LocalGrid>>& grids,
+                 const GraphState& graph) {
+  std::vector<map::SubmapEntry> entries;
+  for (const SubmapPose& p : graph.submaps) {
+    entries.push_back({p.id, grids.at(p.id), p.T_world_submap, p.T_world_submap.inverse()});
+  }
+  map::MergeConfig exact;
+  exact.remerge_translation_m = 0.0;
+  exact.remerge_rotation_rad = 0.0;
+  exact.threads = 1;
+  ASSERT_TRUE(merged.sync(entries, exact).ok());
+}
+
+TEST_F(ApiServerTest, SubmapsFetchedOnceAndTheGraphStreamRebuildTheServersMapBitForBit) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  auto subscribed = c->subscribe({false, false, false, true});
+  ASSERT_TRUE(subscribed.ok() && subscribed->graph);
+  GraphState held;
+  followGraph(*c, held, backend_.graph()->version);
+  ASSERT_EQ(held.submaps.size(), 3u);
+
+  std::map<std::uint32_t, std::shared_ptr<const map::LocalGrid>> grids;
+  for (const SubmapPose& p : held.submaps) {
+    auto grid = c->fetchSubmap(p.id, 4096);  // small slices: many chunks
+    ASSERT_TRUE(grid.ok()) << grid.error().message;
+    // The same tree: the .ot bytes of both grids are equal.
+    EXPECT_EQ((*grid)->serialize().value(), backend_.submapGrid(p.id)->serialize().value());
+    grids[p.id] = std::move(grid).value();
+  }
+  auto mirror = map::MergedMap::create(backend_.gridConfig()).value();
+  mergeMirror(*mirror, grids, held);
+  EXPECT_TRUE(mirror->sameVoxels(*backend_.mapSnapshot()));
+
+  // A new submap, a loop closure moving submap 0, the closure itself: only those travel.
+  backend_.addSubmap(3);
+  server_->publishGraph();
+  backend_.moveSubmap(0, geometry::poseFromXyzRpy(0.3, -0.2, 0.05, 0.0, 0.0, 0.08));
+  backend_.addClosure(3, 0);
+  server_->publishGraph();
+  std::size_t moved = 0;
+  followGraph(*c, held, backend_.graph()->version, &moved);
+  EXPECT_EQ(moved, 2u) << "submap 3 (new) and submap 0 (moved)";
+  ASSERT_EQ(held.closures.size(), 1u);
+  EXPECT_EQ(held.closures[0], (ClosurePair{3, 0}));
+  grids[3] = c->fetchSubmap(3).value();
+  mergeMirror(*mirror, grids, held);
+  EXPECT_TRUE(mirror->sameVoxels(*backend_.mapSnapshot()));
+  EXPECT_EQ(mirror->knownVoxelCount(), backend_.mapSnapshot()->knownVoxelCount());
+
+  // GetGraph answers the same graph whole.
+  GraphState whole;
+  ASSERT_TRUE(applyGraphUpdate(whole, c->graph().value()).ok());
+  EXPECT_EQ(whole.version, held.version);
+  ASSERT_EQ(whole.submaps.size(), held.submaps.size());
+  for (std::size_t i = 0; i < whole.submaps.size(); ++i) {
+    EXPECT_TRUE(whole.submaps[i].T_world_submap.matrix() == held.submaps[i].T_world_submap.matrix());
+  }
+}
+
+TEST_F(ApiServerTest, AGraphClientThatFellBehindGetsOneUpdateSpanningWhatItMissed) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  ASSERT_TRUE(c->subscribe({false, false, false, true}).ok());
+  GraphState held;
+  followGraph(*c, held, backend_.graph()->version);
+  const std::uint64_t before = held.version;
+  // Three changes published while the client reads nothing.
+  for (std::size_t i = 3; i < 6; ++i) {
+    backend_.addSubmap(i);
+    server_->publishGraph();
+  }
+  followGraph(*c, held, backend_.graph()->version);
+  EXPECT_EQ(held.version, before + 3);
+  EXPECT_EQ(held.submaps.size(), 6u);
+}
+
+TEST_F(ApiServerTest, GetSubmapRefusesUnknownIdsAndChunksLargerThanAFrame) {
+  start();
+  auto c = connect();
+  ASSERT_TRUE(c);
+  auto unknown = c->fetchSubmap(99);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_INVALID_ARGUMENT);
+  EXPECT_NE(unknown.error().message.find("99"), std::string::npos) << unknown.error().message;
+  auto huge = c->fetchSubmap(0, 8u << 20);
+  ASSERT_FALSE(huge.ok());
+  EXPECT_EQ(c->lastServerError().code, v1::ERROR_CODE_INVALID_ARGUMENT);
+  EXPECT_NE(huge.error().message.find("max_bytes_per_chunk"), std::string::npos) << huge.error().message;
+  // The connection is still good.
+  EXPECT_TRUE(c->fetchSubmap(1).ok());
 }
 
 }  // namespace

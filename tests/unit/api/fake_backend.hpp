@@ -6,6 +6,7 @@
 #include "map_fixtures.hpp"
 #include "vog/api/domain.hpp"
 
+#include <algorithm>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -13,6 +14,18 @@
 namespace vog::api::test {
 
 class FakeBackend final : public ApiBackend {
+ private:
+  // The graph of the merged submaps at their poses, the next version (caller holds mutex_).
+  void publishGraphLocked() {
+    auto g = std::make_shared<GraphState>();
+    g->version = graph_ ? graph_->version + 1 : 1;
+    std::vector<std::size_t> ids = merged_ids_;
+    std::sort(ids.begin(), ids.end());
+    for (const std::size_t i : ids) g->submaps.push_back({entries_[i].id, entries_[i].T_world_submap});
+    g->closures = closures_;
+    graph_ = std::move(g);
+  }
+
  public:
   // `n_initial` of the built submaps are merged at construction; addSubmap() merges more.
   explicit FakeBackend(int n_submaps = 6, std::size_t n_initial = 3) {
@@ -36,6 +49,7 @@ class FakeBackend final : public ApiBackend {
     (void)merged_->add(entries_.at(i));
     merged_ids_.push_back(i);
     snapshot_ = merged_->snapshot();
+    publishGraphLocked();
   }
   // Moves a merged submap (a loop closure) and re-merges it.
   void moveSubmap(std::size_t i, const geometry::Pose3& T_delta) {
@@ -45,6 +59,32 @@ class FakeBackend final : public ApiBackend {
     entries_[i].T_submap_world = entries_[i].T_world_submap.inverse();
     (void)merged_->add(entries_[i]);
     snapshot_ = merged_->snapshot();
+    publishGraphLocked();
+  }
+  // A loop closure between two merged submaps (in the graph from the next change on).
+  void addClosure(std::uint32_t from, std::uint32_t to) {
+    std::lock_guard lock(mutex_);
+    closures_.push_back({from, to});
+    publishGraphLocked();
+  }
+
+  std::shared_ptr<const GraphState> graph() const override {
+    std::lock_guard lock(mutex_);
+    return graph_;
+  }
+  std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t id) const override {
+    std::lock_guard lock(mutex_);
+    for (const std::size_t i : merged_ids_) {
+      if (entries_[i].id == id) return entries_[i].grid;
+    }
+    return nullptr;
+  }
+  // The merged submaps as vogd's merge holds them (for comparisons with a client's copy).
+  std::vector<map::SubmapEntry> mergedEntries() const {
+    std::lock_guard lock(mutex_);
+    std::vector<map::SubmapEntry> out;
+    for (const std::size_t i : merged_ids_) out.push_back(entries_[i]);
+    return out;
   }
 
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override {
@@ -121,6 +161,8 @@ class FakeBackend final : public ApiBackend {
 
   std::string configText() const override { return "api:\n  port: 7400\nmap:\n  resolution_m: 0.095\n"; }
 
+  const map::GridConfig& gridConfig() const { return config_; }
+
   std::vector<MissionCommand> commands() const {
     std::lock_guard lock(mutex_);
     return commands_;
@@ -143,6 +185,8 @@ class FakeBackend final : public ApiBackend {
   ExplorationBox box_;                                   // guarded by mutex_
   bool has_box_ = false;                                 // guarded by mutex_
   std::vector<MissionCommand> commands_;                 // guarded by mutex_
+  std::vector<ClosurePair> closures_;                    // guarded by mutex_
+  std::shared_ptr<const GraphState> graph_;              // guarded by mutex_
   std::shared_ptr<ServedCloud> cloud_ = std::make_shared<ServedCloud>();
 };
 

@@ -67,6 +67,9 @@ class RecordingBackend final : public api::ApiBackend {
   }
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override { return snapshot_; }
   std::vector<api::SubmapInfo> submaps() const override { return submaps_; }
+  // No pose graph and no grids: these clients never ask for them.
+  std::shared_ptr<const api::GraphState> graph() const override { return nullptr; }
+  std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t) const override { return nullptr; }
   std::shared_ptr<const api::ServedCloud> cloud() const override {
     std::lock_guard lock(mutex_);
     return cloud_;

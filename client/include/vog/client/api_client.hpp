@@ -3,6 +3,7 @@
 // request ids, receive stream messages, follow the merged map into a MapMirror.
 
 #include "vog/api/domain.hpp"
+#include "vog/api/graph.hpp"
 #include "vog/api/map_delta.hpp"
 #include "vog/core/result.hpp"
 #include "vog/v1/api.pb.h"
@@ -45,7 +46,7 @@ struct ServerInfo {
   bool operator_enabled = false;
 };
 
-using StreamMessage = std::variant<api::Waypoint, api::PoseUpdate, api::StatusUpdate>;
+using StreamMessage = std::variant<api::Waypoint, api::PoseUpdate, api::StatusUpdate, api::GraphUpdate>;
 
 // Progress of a chunked transfer: items (blocks or points) received so far and in total.
 using ProgressFn = std::function<void(std::uint64_t received, std::uint64_t total)>;
@@ -76,6 +77,10 @@ class ApiClient {
   Result<api::StatusReport> status();
   Result<api::Subscriptions> subscribe(const api::Subscriptions& subscriptions);
   Result<std::vector<api::SubmapInfo>> submaps();
+  // GetGraph: the whole pose graph (a full update; UNAVAILABLE before the first closed submap).
+  Result<api::GraphUpdate> graph();
+  // GetSubmap: a closed submap's grid, every chunk checked (length, CRC-32) and the tree rebuilt.
+  Result<std::unique_ptr<map::LocalGrid>> fetchSubmap(std::uint32_t id, std::uint32_t max_bytes_per_chunk = 0);
   // The reconstruction; asks again for up to 5 s while the server answers UNAVAILABLE (vogd builds
   // one only once asked for).
   Result<api::Cloud> cloud(const ProgressFn& progress = {});
@@ -88,6 +93,8 @@ class ApiClient {
   // The next stream message (buffered first), or an error after `timeout`.
   Result<StreamMessage> nextStream(std::chrono::milliseconds timeout);
   std::size_t droppedStreams() const { return dropped_streams_; }
+  // Bytes read from the connection so far (TLS: the decrypted bytes), for link budgets.
+  std::uint64_t bytesReceived() const { return bytes_received_; }
 
   // The last Error frame the server sent (for callers that need its code).
   const ServerError& lastServerError() const { return last_server_error_; }
@@ -120,6 +127,7 @@ class ApiClient {
   std::uint64_t next_id_ = 1;
   std::deque<v1::Envelope> streams_;
   std::size_t dropped_streams_ = 0;
+  std::uint64_t bytes_received_ = 0;
   ServerError last_server_error_;
   bool broken_ = false;
 };

@@ -1,7 +1,7 @@
 #pragma once
 // vogd's API server: TCP sessions on the daemon's I/O io_context (DESIGN "Threads in vogd"), framing
 // (vog/api/framing.hpp), requests answered by a Dispatcher over an ApiBackend, and server-pushed
-// streams (waypoints, poses, status) that other threads publish.
+// streams (waypoints, poses, status, the pose graph) that other threads publish.
 //
 // Per-client outbound queue (the rule that keeps a slow topside from stalling the vehicle):
 //  - responses are never dropped. While a client's unsent responses number `max_queued_responses`
@@ -123,6 +123,8 @@ class ApiServer {
   void publishWaypoint(const Waypoint& waypoint);
   void publishPose(const PoseUpdate& pose);
   void publishStatus(const StatusReport& status);
+  // The backend's graph() changed: every session subscribed to the graph gets what it lacks.
+  void publishGraph();
   // Thread-safe: stops accepting and closes every session.
   void stop();
 

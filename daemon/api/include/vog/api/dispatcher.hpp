@@ -71,6 +71,7 @@ class Dispatcher {
   Reply challenge(std::uint64_t id, const v1::ChallengeResponse& response, SessionState& session);
   Reply map(std::uint64_t id, const v1::GetMap& request);
   Reply cloud(std::uint64_t id, const v1::GetCloud& request);
+  Reply submap(std::uint64_t id, const v1::GetSubmap& request);
   Reply command(std::uint64_t id, const v1::MissionCommand& request, SessionState& session);
   void log(LogLevel level, const std::string& message) const;
 

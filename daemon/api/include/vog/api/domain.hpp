@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -39,6 +40,15 @@ struct DeviceHealth {
   std::uint64_t errors = 0;
 };
 
+// Exploration box in the world frame.
+struct ExplorationBox {
+  Eigen::Vector3d min_world_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max_world_m = Eigen::Vector3d::Zero();
+
+  // Finite corners with min < max on every axis, each side at most 10 km.
+  Status validate() const;
+};
+
 struct StatusReport {
   std::int64_t stamp_ns = 0;
   MissionState mission_state = MissionState::kIdle;
@@ -50,6 +60,8 @@ struct StatusReport {
   std::uint32_t n_closures = 0;
   PlannerState planner_state = PlannerState::kIdle;
   std::uint64_t map_version = 0;
+  std::uint64_t graph_version = 0;
+  std::optional<ExplorationBox> box;  // none while no box is set
 };
 
 struct SubmapInfo {
@@ -95,15 +107,6 @@ struct StatusUpdate {
   std::uint64_t dropped = 0;
 };
 
-// Exploration box in the world frame.
-struct ExplorationBox {
-  Eigen::Vector3d min_world_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d max_world_m = Eigen::Vector3d::Zero();
-
-  // Finite corners with min < max on every axis, each side at most 10 km.
-  Status validate() const;
-};
-
 struct MissionCommand {
   enum class Kind : std::uint8_t { kSetBox, kStart, kPause, kResume, kAbort, kReturnHome };
   Kind kind = Kind::kStart;
@@ -115,6 +118,26 @@ struct Subscriptions {
   bool waypoints = false;
   bool poses = false;
   bool status = false;
+  bool graph = false;
+};
+
+// The pose graph as the API serves it (vog/api/graph.hpp): every closed submap's base pose, the exact
+// matrix the merged map uses, and the submap pairs of the loop closures. `version` counts changes
+// (1, 2, ... per daemon run). Immutable once published.
+struct SubmapPose {
+  std::uint32_t id = 0;
+  geometry::Pose3 T_world_submap = geometry::Pose3::Identity();
+};
+struct ClosurePair {
+  std::uint32_t from = 0;
+  std::uint32_t to = 0;
+  bool operator==(const ClosurePair&) const = default;
+};
+struct GraphState {
+  std::uint64_t version = 0;
+  std::int64_t stamp_ns = 0;
+  std::vector<SubmapPose> submaps;  // ascending id
+  std::vector<ClosurePair> closures;
 };
 
 // What vogd gives the API. Every method is called on the API's io_context thread, so each must be
@@ -127,6 +150,10 @@ class ApiBackend {
   // The newest merged-map snapshot; null while there is no map yet.
   virtual std::shared_ptr<const map::MergedMap> mapSnapshot() const = 0;
   virtual std::vector<SubmapInfo> submaps() const = 0;
+  // The newest pose graph (null before the first); GetGraph and the graph stream serve it.
+  virtual std::shared_ptr<const GraphState> graph() const = 0;
+  // A closed submap's grid (immutable), null when no closed submap has this id.
+  virtual std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t id) const = 0;
   // The newest reconstruction built so far (it may lag the newest map version); null while there is
   // none. Never builds one on the calling (io) thread.
   virtual std::shared_ptr<const ServedCloud> cloud() const = 0;

@@ -81,6 +81,8 @@ class Daemon final : public api::ApiBackend, private SourceSink {
   api::StatusReport status() const override;
   std::shared_ptr<const map::MergedMap> mapSnapshot() const override;
   std::vector<api::SubmapInfo> submaps() const override;
+  std::shared_ptr<const api::GraphState> graph() const override;
+  std::shared_ptr<const map::LocalGrid> submapGrid(std::uint32_t id) const override;
   std::shared_ptr<const api::ServedCloud> cloud() const override;
   Result<api::MissionState> command(const api::MissionCommand& command) override;
   std::string configText() const override;

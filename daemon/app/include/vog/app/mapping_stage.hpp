@@ -35,6 +35,9 @@ namespace vog::app {
 // odometry frame. Immutable once published.
 struct MappingState {
   std::vector<api::SubmapInfo> submaps;
+  std::vector<map::SubmapEntry> entries;  // the closed submaps' grids (shared, immutable) and base poses
+  // The pose graph as the API serves it: its version grows when a base pose or the closures changed.
+  std::shared_ptr<const api::GraphState> graph;
   std::vector<slam::SubmapRecord> records;
   std::vector<slam::ClosurePair> closure_pairs;
   std::uint32_t n_closures = 0;
@@ -72,6 +75,8 @@ class MappingStage {
  private:
   Status persist(const slam::MappingUpdate& update);
   void publish();
+  // The API's pose graph of `s`: the previous one when nothing in it changed, else the next version.
+  std::shared_ptr<const api::GraphState> graphOf(const MappingState& s);
   // Logs a storage fault when it appears and when it is over.
   void logStorage(const mission::StorageHealth& health);
 
@@ -82,6 +87,7 @@ class MappingStage {
   map::MergeWorker& merge_;
   const std::function<void()> published_;
   std::uint64_t rejected_scans_ = 0;                    // mapping thread
+  std::uint64_t graph_version_ = 0;                     // mapping thread
   bool storage_fault_logged_ = false;                   // mapping thread
   std::chrono::steady_clock::time_point last_retry_{};  // mapping thread
 

@@ -24,6 +24,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace octomap {
@@ -46,6 +47,8 @@ class LocalGrid {
   // Adopts a tree read from disk (resolution must match config); the grid is finalized.
   static Result<std::unique_ptr<LocalGrid>> fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
   static Result<std::unique_ptr<LocalGrid>> load(const GridConfig& config, const std::filesystem::path& ot_file);
+  // The inverse of serialize(): a finalized grid from .ot bytes (e.g. received over the API).
+  static Result<std::unique_ptr<LocalGrid>> deserialize(const GridConfig& config, std::string_view ot_bytes);
 
   ~LocalGrid();
   LocalGrid(const LocalGrid&) = delete;

@@ -1,0 +1,132 @@
+// The graph stream's updates without sockets: an update carries exactly the new and moved base poses
+// and the new closures, applying it reproduces the newer graph bit for bit, and what arrives over the
+// wire is checked.
+#include "vog/api/graph.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace vog::api {
+namespace {
+
+GraphState chain(std::uint64_t version, int n) {
+  GraphState g;
+  g.version = version;
+  for (int i = 0; i < n; ++i) {
+    g.submaps.push_back(
+        {static_cast<std::uint32_t>(i), geometry::poseFromXyzRpy(1.3 * i, 0.2 * i, -2.0, 0.01, -0.02, 0.1 * i)});
+  }
+  return g;
+}
+
+bool bitEqual(const GraphState& a, const GraphState& b) {
+  if (a.version != b.version || a.submaps.size() != b.submaps.size() || a.closures != b.closures) return false;
+  for (std::size_t i = 0; i < a.submaps.size(); ++i) {
+    if (a.submaps[i].id != b.submaps[i].id ||
+        std::memcmp(a.submaps[i].T_world_submap.matrix().data(), b.submaps[i].T_world_submap.matrix().data(),
+                    16 * sizeof(double)) != 0) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Through protobuf and back, as a client receives it.
+GraphUpdate wire(const GraphUpdate& u) {
+  v1::GraphUpdate p;
+  toProto(u, p);
+  v1::GraphUpdate parsed;
+  EXPECT_TRUE(parsed.ParseFromString(p.SerializeAsString()));
+  return fromProto(parsed).value();
+}
+
+TEST(GraphUpdate, CarriesOnlyNewAndMovedPosesAndReproducesTheGraphBitForBit) {
+  const GraphState v1 = chain(1, 5);
+  GraphState v2 = chain(2, 7);  // two new submaps; a loop closure moved submaps 3 and 4
+  v2.submaps[3].T_world_submap = geometry::poseFromXyzRpy(0.1, 0.2, 0.3, 0.0, 0.0, 0.4) * v2.submaps[3].T_world_submap;
+  v2.submaps[4].T_world_submap.translation().x() += 1e-12;  // a move in the last bits still travels
+  v2.closures = {{6, 1}};
+
+  const GraphUpdate u = graphUpdate(&v1, v2);
+  EXPECT_FALSE(u.full);
+  EXPECT_EQ(u.base_version, 1u);
+  ASSERT_EQ(u.submaps.size(), 4u);
+  EXPECT_EQ(u.submaps[0].id, 3u);
+  EXPECT_EQ(u.submaps[1].id, 4u);
+  EXPECT_EQ(u.submaps[2].id, 5u);
+  EXPECT_EQ(u.submaps[3].id, 6u);
+  ASSERT_EQ(u.closures.size(), 1u);
+
+  GraphState held = v1;
+  ASSERT_TRUE(applyGraphUpdate(held, wire(u)).ok());
+  EXPECT_TRUE(bitEqual(held, v2));
+
+  // From nothing: a full update.
+  const GraphUpdate f = graphUpdate(nullptr, v2);
+  EXPECT_TRUE(f.full);
+  GraphState fresh;
+  ASSERT_TRUE(applyGraphUpdate(fresh, wire(f)).ok());
+  EXPECT_TRUE(bitEqual(fresh, v2));
+
+  // Unchanged: nothing but the version.
+  GraphState v3 = v2;
+  v3.version = 3;
+  EXPECT_TRUE(graphUpdate(&v2, v3).submaps.empty());
+  EXPECT_TRUE(graphUpdate(&v2, v3).closures.empty());
+}
+
+TEST(GraphUpdate, AnUpdateForAnotherVersionIsRefusedAndAShrunkGraphIsSentWhole) {
+  const GraphState v1 = chain(1, 5);
+  const GraphState v2 = chain(2, 6);
+  const GraphState v3 = chain(3, 7);
+  GraphState held = v1;
+  const Status st = applyGraphUpdate(held, graphUpdate(&v2, v3));
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().message.find("resynchronise"), std::string::npos) << st.error().message;
+  EXPECT_TRUE(bitEqual(held, v1)) << "unchanged";
+
+  // A closure switched off (the list is not the held one grown) or a submap gone: full updates.
+  GraphState with = v2;
+  with.closures = {{5, 0}, {4, 1}};
+  GraphState without = v3;
+  without.closures = {{4, 1}};
+  EXPECT_TRUE(graphUpdate(&with, without).full);
+  EXPECT_TRUE(graphUpdate(&v3, v2).full);
+  held = with;
+  ASSERT_TRUE(applyGraphUpdate(held, wire(graphUpdate(&with, without))).ok());
+  EXPECT_TRUE(bitEqual(held, without));
+}
+
+TEST(GraphUpdate, WhatArrivesIsChecked) {
+  v1::GraphUpdate p;
+  toProto(graphUpdate(nullptr, chain(1, 3)), p);
+  ASSERT_TRUE(fromProto(p).ok());
+
+  v1::GraphUpdate short_poses = p;
+  short_poses.mutable_poses()->RemoveLast();
+  EXPECT_NE(fromProto(short_poses).error().message.find("12 each"), std::string::npos);
+
+  v1::GraphUpdate nan = p;
+  nan.set_poses(3, std::nan(""));
+  EXPECT_NE(fromProto(nan).error().message.find("not finite"), std::string::npos);
+
+  v1::GraphUpdate skewed = p;
+  skewed.set_poses(0, 2.0);  // r00 = 2: no rotation
+  EXPECT_NE(fromProto(skewed).error().message.find("no rotation"), std::string::npos);
+
+  v1::GraphUpdate unordered = p;
+  unordered.set_submap_ids(1, 0);
+  EXPECT_NE(fromProto(unordered).error().message.find("ascending"), std::string::npos);
+
+  v1::GraphUpdate odd = p;
+  odd.add_closures(1);
+  EXPECT_NE(fromProto(odd).error().message.find("odd"), std::string::npos);
+
+  v1::GraphUpdate count = p;
+  count.set_n_submaps(4);
+  EXPECT_NE(fromProto(count).error().message.find("n_submaps"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vog::api
