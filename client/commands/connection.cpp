@@ -30,6 +30,14 @@ void ProgressLine::finish() {
 
 }  // namespace detail
 
+ClientConfig ConnectionOptions::clientConfig() const {
+  ClientConfig config;
+  config.timeout = std::chrono::milliseconds(timeout_ms);
+  config.tls.enabled = tls || !ca_file.empty();
+  config.tls.ca_file = ca_file;
+  return config;
+}
+
 void ConnectionOptions::addTo(CLI::App& cmd) {
   cmd.add_option("--host", host, "vogd host")->capture_default_str();
   cmd.add_option("--port", port, "vogd API port")->capture_default_str();
@@ -41,10 +49,7 @@ void ConnectionOptions::addTo(CLI::App& cmd) {
   cmd.add_option("--ca-file", ca_file, "CA certificate(s) that signed vogd's certificate, PEM (implies --tls)");
 }
 
-namespace {
-
-// The secret file's content without a trailing newline (an editor's or `echo`'s, not the secret's).
-Result<std::string> readSecret(const std::string& file) {
+Result<std::string> readSecretFile(const std::string& file) {
   // A secret is short; a larger file is the wrong file.
   constexpr std::size_t kMaxSecretBytes = 4096;
   std::ifstream in(file, std::ios::binary);
@@ -61,8 +66,6 @@ Result<std::string> readSecret(const std::string& file) {
   return secret;
 }
 
-}  // namespace
-
 Connection openConnection(const ConnectionOptions& options, const CommandIo& io, const std::string& command,
                           bool need_operator) {
   Connection out;
@@ -74,7 +77,7 @@ Connection openConnection(const ConnectionOptions& options, const CommandIo& io,
   // Read the secret before connecting: a typo in the path is reported without a round trip.
   std::string secret;
   if (!options.secret_file.empty()) {
-    auto s = readSecret(options.secret_file);
+    auto s = readSecretFile(options.secret_file);
     if (!s) {
       detail::report(io, command, s.error().message);
       out.exit_code = kExitUsage;
@@ -82,11 +85,7 @@ Connection openConnection(const ConnectionOptions& options, const CommandIo& io,
     }
     secret = std::move(*s);
   }
-  ClientConfig config;
-  config.timeout = std::chrono::milliseconds(options.timeout_ms);
-  config.tls.enabled = options.tls || !options.ca_file.empty();
-  config.tls.ca_file = options.ca_file;
-  auto c = ApiClient::connect(options.host, options.port, config);
+  auto c = ApiClient::connect(options.host, options.port, options.clientConfig());
   if (!c) {
     detail::report(io, command, c.error().message);
     out.exit_code = kExitUsage;

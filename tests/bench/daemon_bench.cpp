@@ -8,6 +8,7 @@
 // vogd and the clients share this machine's cores.
 #include "bench_cli.hpp"
 #include "bench_registry.hpp"
+#include "proc_sample.hpp"
 #include "subprocess.hpp"
 
 #include "vog/client/api_client.hpp"
@@ -31,33 +32,6 @@ using Clock = std::chrono::steady_clock;
 std::int64_t unixNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
-}
-
-struct ProcSample {
-  double t_s = 0.0;    // steady clock when sampled
-  double cpu_s = 0.0;  // user + system
-  double rss_mb = 0.0;
-  double hwm_mb = 0.0;
-};
-
-std::optional<ProcSample> sampleProc(pid_t pid) {
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string line;
-  if (!std::getline(stat, line)) return std::nullopt;
-  // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
-  std::istringstream rest(line.substr(line.rfind(')') + 2));
-  std::vector<std::string> f;
-  for (std::string w; rest >> w;) f.push_back(w);
-  if (f.size() < 13) return std::nullopt;
-  ProcSample s;
-  s.t_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-  s.cpu_s = (std::stod(f[11]) + std::stod(f[12])) / static_cast<double>(::sysconf(_SC_CLK_TCK));
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  for (std::string l; std::getline(status, l);) {
-    if (l.rfind("VmRSS:", 0) == 0) s.rss_mb = std::stod(l.substr(6)) / 1024.0;
-    if (l.rfind("VmHWM:", 0) == 0) s.hwm_mb = std::stod(l.substr(6)) / 1024.0;
-  }
-  return s;
 }
 
 }  // namespace
@@ -157,13 +131,13 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   if (!op) return fail("operator: " + op.error().message);
   if (auto r = (*op)->authenticate(vog::bench::kOperatorSecret); !r)
     return fail("operator authentication: " + r.error().message);
-  std::vector<ProcSample> samples;
+  std::vector<vog::bench::ProcSample> samples;
   const auto t0 = Clock::now();
   int tick = 0;
   while (std::chrono::duration<double>(Clock::now() - t0).count() < max_s) {
     std::this_thread::sleep_for(std::chrono::seconds(1));
     ++tick;
-    if (auto s = sampleProc(daemon.pid())) samples.push_back(*s);
+    if (auto s = vog::bench::sampleProc(daemon.pid())) samples.push_back(*s);
     auto st = (*op)->status();
     if (!st) return fail("operator status: " + st.error().message);
     if (!(*op)->configText()) return fail("operator config read failed");
@@ -186,7 +160,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
   std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the last waypoints reach everyone
   stop = true;
   for (auto& t : threads) t.join();
-  if (auto s = sampleProc(daemon.pid())) samples.push_back(*s);
+  if (auto s = vog::bench::sampleProc(daemon.pid())) samples.push_back(*s);
   daemon.signal(SIGTERM);
   const int exit_status = daemon.wait(5.0);
 
@@ -209,7 +183,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
     }
     resume_s = std::chrono::duration<double>(Clock::now() - r0).count();
     std::this_thread::sleep_for(std::chrono::seconds(2));  // the merge of what was read back settles
-    if (auto s = sampleProc(again.pid())) resumed_rss_mb = s->rss_mb;
+    if (auto s = vog::bench::sampleProc(again.pid())) resumed_rss_mb = s->rss_mb;
     again.signal(SIGTERM);
     again.wait(5.0);
   }
@@ -223,7 +197,7 @@ VOG_BENCH_COMMAND(daemon, "vogd on a simulated mission with 32 observers + 1 ope
     cpu_pct.push_back(100.0 * (samples[i].cpu_s - samples[i - 1].cpu_s) /
                       std::max(1e-3, samples[i].t_s - samples[i - 1].t_s));
   double rss_sum = 0.0;
-  for (const ProcSample& s : samples) rss_sum += s.rss_mb;
+  for (const vog::bench::ProcSample& s : samples) rss_sum += s.rss_mb;
   for (std::uint64_t r : received) published = std::max(published, r);
   std::uint64_t min_received = published, drops = 0;
   for (std::size_t i = 0; i < received.size(); ++i) {

@@ -925,12 +925,18 @@ Result<std::uint16_t> ApiServer::listen(const std::string& address, std::uint16_
   return bound;
 }
 
+namespace {
+std::int64_t unixNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
 void ApiServer::publishWaypoint(const Waypoint& waypoint) {
   Waypoint w = waypoint;
   w.seq = ++core_->waypoint_seq;
   w.dropped = 0;
-  w.published_unix_ns =
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  w.published_unix_ns = unixNowNs();
   ++core_->n_waypoints;
   asio::post(core_->io, [core = core_, w] {
     for (auto& s : core->sessionList()) s->pushWaypoint(w);
@@ -941,6 +947,7 @@ void ApiServer::publishPose(const PoseUpdate& pose) {
   PoseUpdate p = pose;
   p.seq = ++core_->pose_seq;
   p.dropped = 0;
+  p.published_unix_ns = unixNowNs();
   asio::post(core_->io, [core = core_, p] {
     for (auto& s : core->sessionList()) s->pushPose(p);
   });

@@ -294,12 +294,13 @@ void toProto(const PoseUpdate& p, v1::PoseUpdate& out) {
   out.set_stamp_ns(p.stamp_ns);
   toProto(p.T_world_vehicle, *out.mutable_pose());
   out.set_dropped(p.dropped);
+  out.set_published_unix_ns(p.published_unix_ns);
 }
 
 Result<PoseUpdate> fromProto(const v1::PoseUpdate& p) {
   auto pose = fromProto(p.pose(), "pose_update.pose");
   if (!pose) return pose.error();
-  return PoseUpdate{p.seq(), p.stamp_ns(), *pose, p.dropped()};
+  return PoseUpdate{p.seq(), p.stamp_ns(), *pose, p.dropped(), p.published_unix_ns()};
 }
 
 void toProto(const StatusUpdate& s, v1::StatusUpdate& out) {

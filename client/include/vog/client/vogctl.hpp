@@ -43,7 +43,13 @@ struct ConnectionOptions {
   std::string ca_file;  // PEM; empty: the system's trusted CAs
 
   void addTo(CLI::App& cmd);
+  // The client's configuration: the timeout and TLS.
+  ClientConfig clientConfig() const;
 };
+
+// The secret file's content without a trailing newline (an editor's or `echo`'s, not the secret's);
+// errors name the file (missing, empty, longer than a secret).
+Result<std::string> readSecretFile(const std::string& file);
 
 // An open connection, or the exit code of the failure (already reported on `err`).
 struct Connection {

@@ -99,6 +99,7 @@ struct PoseUpdate {
   std::int64_t stamp_ns = 0;
   geometry::Pose3 T_world_vehicle = geometry::Pose3::Identity();
   std::uint64_t dropped = 0;
+  std::int64_t published_unix_ns = 0;  // set by ApiServer::publishPose: its wall clock (Unix ns)
 };
 
 struct StatusUpdate {
