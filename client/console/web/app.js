@@ -280,6 +280,58 @@ $('voxel-mode').addEventListener('change', (e) => {
   slowDraws = 0;
   needsRender = true;
 });
+// How long this machine takes to draw a cube, measured once at start (also compiles the voxel shaders):
+// 0 when it is fast (a GPU), else milliseconds per cube (software rendering).
+let cubeCostMs = 0;
+function probeDrawCost() {
+  const n = 2000;
+  const probe = new THREE.InstancedMesh(voxels.cubeGeometry, voxels.cubeMaterial, n);
+  probe.frustumCulled = false;
+  const m = new THREE.Matrix4();
+  const dir = new THREE.Vector3();
+  camera.getWorldDirection(dir);
+  const c = camera.position.clone().addScaledVector(dir, 10);
+  // small cubes: the cost of their vertices, not of filling the view
+  for (let i = 0; i < n; i++) {
+    m.makeScale(0.01, 0.01, 0.01).setPosition(c.x + ((i % 50) - 25) * 0.02, c.y + (Math.floor(i / 50) - 20) * 0.02, c.z);
+    probe.setMatrixAt(i, m);
+  }
+  const g = renderer.getContext();
+  const px = new Uint8Array(4);
+  const time = () => {
+    const t = performance.now();
+    renderer.render(scene, camera);
+    g.readPixels(0, 0, 1, 1, g.RGBA, g.UNSIGNED_BYTE, px);
+    return performance.now() - t;
+  };
+  // compile every program now (software GL takes long; hidden objects would compile on first show)
+  const hidden = [];
+  scene.traverse((o) => { if (!o.visible) { hidden.push(o); o.visible = true; } });
+  renderer.compile(scene, camera);
+  time();
+  for (const o of hidden) o.visible = false;
+  const base = Math.min(time(), time());
+  scene.add(probe);
+  time(); // compiles
+  const t = Math.min(time(), time());
+  scene.remove(probe);
+  probe.dispose();
+  const extra = t - base;
+  cubeCostMs = extra > 5 ? extra / n : 0;
+  return { baseMs: base, cubesMs: t, cubeCostMs };
+}
+
+// Auto mode: points when the whole map as cubes would take too long to draw here.
+function chooseVoxelMode(expected) {
+  if (voxelMode !== 'auto' || voxels.mode !== 'cubes' || cubeCostMs === 0) return;
+  const ms = cubeCostMs * expected;
+  if (ms > 60) {
+    voxels.setMode('points');
+    localEvent('info', `drawing voxels as points: ${expected} cubes would take about ${ms.toFixed(0)} ms a frame here`);
+    needsRender = true;
+  }
+}
+
 function noteDrawCost(ms) {
   if (voxelMode !== 'auto' || voxels.mode !== 'cubes') return;
   if (ms > 90 && voxels.occupiedCount > 20000) slowDraws++; else slowDraws = Math.max(0, slowDraws - 1);
@@ -362,7 +414,8 @@ function scheduleReconnect() {
 
 function onBinary(buf) {
   try {
-    voxels.enqueue(buf);
+    const h = voxels.enqueue(buf);
+    chooseVoxelMode(Math.max(h.totalOccupied, voxels.occupiedCount));
   } catch (e) {
     localEvent('error', 'voxel message dropped: ' + e.message);
   }
@@ -450,6 +503,8 @@ let maxFrameMs = 0;
 let fpsCount = 0, fpsAt = performance.now();
 let lastResolution = 0;
 let lastInterval = null;
+const slowFrames = []; // the frames that took long, and what the frame before them did
+let lastApplied = 0;
 let renderedLast = false;
 let lastDrawAt = -Infinity;
 let drawCost = 0; // the interval of the last frame that drew
@@ -462,10 +517,15 @@ function frame(now) {
     frameIntervals.push(dt);
     if (frameIntervals.length > MAX_FRAME_SAMPLES) frameIntervals.shift();
     if (dt > maxFrameMs) maxFrameMs = dt;
+    if (dt > 150) slowFrames.push({ at: Math.round(now - startedAt), ms: Math.round(dt), drew: renderedLast, applied: lastApplied, n: voxels.occupiedCount, mode: voxels.mode });
+    if (slowFrames.length > 50) slowFrames.shift();
   }
   lastFrame = now;
 
-  if (voxels.step()) {
+  const appliedBefore = voxels.occupiedCount;
+  const stepped = voxels.step();
+  lastApplied = voxels.occupiedCount - appliedBefore;
+  if (stepped) {
     needsRender = true;
     setText('occupied-count', voxels.occupiedCount);
     setText('free-count', voxels.freeCount);
@@ -479,6 +539,15 @@ function frame(now) {
       mission.setScale(lastResolution);
     }
     if (!viewFitted && voxels.pendingMessages === 0 && voxels.occupiedCount > 0) { viewFitted = true; resetView(); }
+  }
+  // the vehicle stays visible from afar: at least ~3% of the view's depth
+  if (mission.pose) {
+    const want = Math.max(mission.baseScale, camera.position.distanceTo(mission.vehicle.position) * 0.03);
+    if (Math.abs(want - mission.vehicle.scale.x) > 0.05 * want) { mission.vehicle.scale.setScalar(want); needsRender = true; }
+  }
+  if (Number.isFinite(voxels.bounds.min[2]) && Math.abs(grid.position.z - (voxels.bounds.min[2] - 0.5)) > 0.5) {
+    grid.position.z = voxels.bounds.min[2] - 0.5; // under the map
+    needsRender = true;
   }
   if ($('toggle-follow').checked && mission.pose) {
     const p = mission.vehicle.position;
@@ -514,6 +583,7 @@ function frame(now) {
 window.vogConsole = {
   occupiedCount: () => voxels.occupiedCount,
   voxelMode: () => voxels.mode,
+  drawProbe: () => probeResult,
   freeCount: () => voxels.freeCount,
   pendingMessages: () => voxels.pendingMessages,
   mapVersion: () => voxels.mapVersion,
@@ -529,6 +599,8 @@ window.vogConsole = {
   disconnects: () => nClosed,
   maxFrameMs: () => maxFrameMs,
   frameTimes: () => frameIntervals.slice(),
+  slowFrames: () => slowFrames.slice(),
+  poseLatencyMs: () => state.poseLatencyMs,
   renderer,
   camera,
   scene,
@@ -546,6 +618,8 @@ window.vogConsole = {
 voxels.onError = (e) => localEvent('error', 'voxel message: ' + e.message);
 resize();
 resetView();
+let probeResult = null;
+try { probeResult = probeDrawCost(); } catch (e) { probeResult = { error: String(e) }; }
 updateControls();
 connect();
 requestAnimationFrame(frame);

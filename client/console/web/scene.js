@@ -108,12 +108,14 @@ export class MissionScene {
     for (const o of [this.baseDots, this.baseAxes, this.closureLines]) { o.frustumCulled = false; scene.add(o); }
     this.axisLength = 0.8;
 
+    this.baseScale = 1;
     this.pose = null; // {p, q, stamp_ns}
     this.sigmaXyz = null;
   }
 
   setScale(resolution) {
     const s = Math.max(0.6, resolution * 6);
+    this.baseScale = s;
     this.vehicle.scale.setScalar(s);
     this.axisLength = s;
     this.rebuildGraph();

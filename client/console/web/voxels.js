@@ -161,7 +161,7 @@ export class VoxelStore {
 
     this.pointsGeometry = new THREE.BufferGeometry();
     this.pointsMaterial = new THREE.PointsMaterial({
-      color: 0x7fb3d5, size: 2, sizeAttenuation: false, transparent: true, opacity: 0.25, depthWrite: false,
+      color: 0x9fd3f5, size: 3, sizeAttenuation: false, transparent: true, opacity: 0.4, depthWrite: false,
     });
     this.points = new THREE.Points(this.pointsGeometry, this.pointsMaterial);
     this.points.frustumCulled = false;
@@ -245,6 +245,8 @@ export class VoxelStore {
   // Queues one binary message; returns its header. Throws if the header is malformed.
   enqueue(buffer) {
     const header = parseVoxelHeader(buffer);
+    // a reset drops everything before it: the messages still pending would be cleared anyway
+    if (header.reset) this.queue.length = 0;
     this.queue.push({ buffer, dv: new DataView(buffer), header, offset: HEADER_BYTES, done: 0, started: false });
     return header;
   }
