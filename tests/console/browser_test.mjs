@@ -166,9 +166,11 @@ async function main() {
         p.count === a.mirror.occupied && p.mapVersion === mapVersionOf(a);
     }, 60000, 300);
     summary.occupied = last;
+    const bookkeeping = await page.evaluate(() => (vogConsole.verifyVoxels ? vogConsole.verifyVoxels() : []));
+    if (bookkeeping.length) { fail(name, `the page's voxel bookkeeping is inconsistent: ${bookkeeping.join('; ')}`); }
     const d = last ? `shown ${JSON.stringify(last.page.shown)} (held ${last.page.count}, pending ${last.page.pending}, ` +
       `map_version ${last.page.mapVersion}) vs mirror.occupied ${last.api} (map_version ${last.apiMapVersion})` : 'no data';
-    if (ok) pass(name, d); else fail(name, d);
+    if (ok && !bookkeeping.length) pass(name, d); else if (!ok) fail(name, d);
   }
 
   const vehiclePos = () => page.evaluate(() => { const p = vogConsole.vehicle.position; return [p.x, p.y, p.z, vogConsole.vehicle.visible]; });

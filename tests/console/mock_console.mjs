@@ -72,7 +72,30 @@ function setVoxel(x, y, z, kind, changed) {
   if (changed) changed.add(k);
 }
 
-const PILLAR = { cx: 0, cy: 0, r: 6.0, maxLayers: 140 };
+function clearVoxel(x, y, z, changed) {
+  const k = keyOf(x >> 3, y >> 3, z >> 3);
+  const b = blocks.get(k);
+  if (!b) return;
+  const i = voxelIndex(x, y, z);
+  if (b.occ.delete(i)) occupied--;
+  if (b.free.delete(i)) freeCount--;
+  if (b.occ.size === 0 && b.free.size === 0) blocks.delete(k); // sent as an entry with no voxels
+  changed.add(k);
+}
+
+// A drifting object (a lost buoy) of 3x3x3 voxels: its old voxels cleared, new ones set, so deltas carry
+// replaced blocks and removed (empty) blocks.
+let buoy = null;
+function moveBuoy(t, changed) {
+  if (buoy) for (const [x, y, z] of buoy) clearVoxel(x + shift, y, z, changed);
+  const cx = Math.round((20 * Math.cos(t * 0.05)) / RES), cy = Math.round((-20 + 8 * Math.sin(t * 0.11)) / RES);
+  const cz = Math.round(6 / RES);
+  buoy = [];
+  for (let dx = 0; dx < 3; dx++) for (let dy = 0; dy < 3; dy++) for (let dz = 0; dz < 3; dz++) buoy.push([cx + dx, cy + dy, cz + dz]);
+  for (const [x, y, z] of buoy) setVoxel(x + shift, y, z, 'occ', changed);
+}
+
+const PILLAR = { cx: 0, cy: 0, r: 6.0, maxLayers: 150 };
 let pillarLayers = 0;
 
 function seabedZ(x, y) { // metres
@@ -82,7 +105,7 @@ function seabedZ(x, y) { // metres
 }
 
 function buildSeabed(changed) {
-  const half = 150; // voxels: 60 m x 60 m
+  const half = 185; // voxels: 74 m x 74 m
   for (let ix = -half; ix < half; ix++) {
     for (let iy = -half; iy < half; iy++) {
       const x = (ix + 0.5) * RES, y = (iy + 0.5) * RES;
@@ -117,6 +140,7 @@ function rebuildMap() {
   freeCount = 0;
   buildSeabed(null);
   for (let l = 0; l < pillarLayers; l++) addPillarLayer(l, null);
+  if (buoy) for (const [x, y, z] of buoy) setVoxel(x + shift, y, z, 'occ', null);
 }
 
 // ------------------------------------------------------------------------------------------ binary messages
@@ -427,11 +451,12 @@ function broadcastDelta(changed) {
   }
 }
 
-// The pillar grows a layer every 0.5 s.
+// The pillar grows a layer every 0.5 s; the buoy drifts.
+let buoyT = 0;
 setInterval(() => {
-  if (pillarLayers >= PILLAR.maxLayers) return;
   const changed = new Set();
-  addPillarLayer(pillarLayers++, changed);
+  if (pillarLayers < PILLAR.maxLayers) addPillarLayer(pillarLayers++, changed);
+  moveBuoy(buoyT++, changed);
   broadcastDelta(changed);
 }, 500);
 
@@ -512,8 +537,8 @@ setInterval(() => {
 
 // ------------------------------------------------------------------------------------------ start
 
+pillarLayers = 60; // the pillar is part built; it grows to PILLAR.maxLayers
 rebuildMap();
-pillarLayers = 0;
 event('info', 'link connected: synthetic vehicle');
 server.listen(opt.port, opt.host, () => {
   const a = server.address();

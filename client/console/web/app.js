@@ -601,6 +601,7 @@ window.vogConsole = {
   frameTimes: () => frameIntervals.slice(),
   slowFrames: () => slowFrames.slice(),
   poseLatencyMs: () => state.poseLatencyMs,
+  verifyVoxels: () => voxels.verify(),
   renderer,
   camera,
   scene,

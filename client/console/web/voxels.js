@@ -454,6 +454,33 @@ export class VoxelStore {
     if (!isOcc && slots.length) this.freeDirty = true;
   }
 
+  // Checks the slot bookkeeping (for tests): every held voxel's slot points back at it, the instance
+  // matrices sit at the slot centres, the counts add up. Returns a list of problems (empty when sound).
+  verify(limit = 10) {
+    const problems = [];
+    let nOcc = 0, nFree = 0;
+    for (const block of this.blocks.values()) {
+      for (const [pool, slots] of [[this.occ, block.occ], [this.free, block.free]]) {
+        for (let k = 0; k < slots.length; k++) {
+          const s = slots[k];
+          if (s < 0 || s >= pool.count || pool.owner[s] !== block || pool.ownerIdx[s] !== k) {
+            if (problems.length < limit) problems.push(`block ${block.key} ${pool.field}[${k}] -> slot ${s} not owned`);
+          } else if (pool === this.occ) {
+            const a = this.matrices;
+            if (a[s * 16 + 12] !== pool.pos[s * 3] || a[s * 16 + 13] !== pool.pos[s * 3 + 1] || a[s * 16 + 14] !== pool.pos[s * 3 + 2]) {
+              if (problems.length < limit) problems.push(`slot ${s}: matrix and centre differ`);
+            }
+          }
+        }
+        if (pool === this.occ) nOcc += slots.length; else nFree += slots.length;
+      }
+    }
+    if (nOcc !== this.occ.count) problems.push(`blocks hold ${nOcc} occupied voxels, the pool ${this.occ.count}`);
+    if (nFree !== this.free.count) problems.push(`blocks hold ${nFree} free voxels, the pool ${this.free.count}`);
+    if (this.mesh.count !== this.occ.count) problems.push(`mesh.count ${this.mesh.count} != ${this.occ.count}`);
+    return problems;
+  }
+
   // Marks what changed for upload (ranges accumulate until the next draw uploads them), on the shown
   // representation only: the other one uploads in full when shown (setMode).
   flush() {
