@@ -440,7 +440,7 @@ function onText(text) {
       break;
     case 'link':
       setBadge('vogd-link', m.state || '–');
-      setText('vogd-host', [m.host, m.detail].filter(Boolean).join(' — '));
+      setText('vogd-host', [m.host, m.detail !== m.host ? m.detail : ''].filter(Boolean).join(' — '));
       break;
     case 'status':
       applyStatus(m);
@@ -566,7 +566,7 @@ function frame(now) {
     lastDrawAt = now;
     renderer.render(scene, camera);
     if (state.pendingPoseStamp) {
-      state.poseLatencyMs = Date.now() - state.pendingPoseStamp;
+      state.poseLatencyMs = Math.round(Date.now() - state.pendingPoseStamp);
       state.pendingPoseStamp = null;
       setText('pose-latency', `${state.poseLatencyMs} ms`);
     }
