@@ -542,7 +542,7 @@ function frame(now) {
   }
   // the vehicle stays visible from afar: at least ~3% of the view's depth
   if (mission.pose) {
-    const want = Math.max(mission.baseScale, camera.position.distanceTo(mission.vehicle.position) * 0.03);
+    const want = Math.max(mission.baseScale, camera.position.distanceTo(mission.vehicle.position) * 0.04);
     if (Math.abs(want - mission.vehicle.scale.x) > 0.05 * want) { mission.vehicle.scale.setScalar(want); needsRender = true; }
   }
   if (Number.isFinite(voxels.bounds.min[2]) && Math.abs(grid.position.z - (voxels.bounds.min[2] - 0.5)) > 0.5) {

@@ -66,6 +66,8 @@ export class MissionScene {
     mast.rotation.x = Math.PI / 2; // along z
     mast.position.set(-0.2, 0, 0.3);
     vehicle.add(mast);
+    // drawn over the map: the operator always sees where the vehicle is
+    vehicle.traverse((o) => { if (o.material) { o.material.depthTest = false; o.renderOrder = 10; } });
     vehicle.visible = false;
     this.vehicle = vehicle;
     scene.add(vehicle);
