@@ -206,6 +206,7 @@ Result<std::uint64_t> ApiClient::send(v1::Envelope envelope) {
 }
 
 Result<v1::Envelope> ApiClient::receive(std::chrono::milliseconds timeout) {
+  timed_out_ = false;
   if (broken_) return Error{"connection is broken"};
   const Clock::time_point deadline = Clock::now() + timeout;
   for (;;) {
@@ -222,7 +223,10 @@ Result<v1::Envelope> ApiClient::receive(std::chrono::milliseconds timeout) {
         done = true;
       });
     });
-    if (!impl_->runUntil(done, deadline)) return Error{"no frame from the server within " + ms(timeout)};
+    if (!impl_->runUntil(done, deadline)) {
+      timed_out_ = true;
+      return Error{"no frame from the server within " + ms(timeout)};
+    }
     if (ec) {
       // A TLS peer that closes without close_notify reads as a truncated stream.
       const bool closed = ec == asio::error::eof || ec == asio::ssl::error::stream_truncated;
@@ -504,6 +508,7 @@ Result<api::Cloud> ApiClient::cloudOnce(const ProgressFn& progress) {
 }
 
 Result<StreamMessage> ApiClient::nextStream(std::chrono::milliseconds timeout) {
+  timed_out_ = false;
   const Clock::time_point deadline = Clock::now() + timeout;
   for (;;) {
     if (!streams_.empty()) {
@@ -529,7 +534,10 @@ Result<StreamMessage> ApiClient::nextStream(std::chrono::milliseconds timeout) {
       return StreamMessage{std::move(*s)};
     }
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) return Error{"no stream message within " + ms(timeout)};
+    if (left.count() <= 0) {
+      timed_out_ = true;
+      return Error{"no stream message within " + ms(timeout)};
+    }
     auto r = receive(left);
     if (!r) return r.error();
     const auto body = r->body_case();

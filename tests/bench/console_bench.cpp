@@ -128,7 +128,9 @@ VOG_BENCH_COMMAND(console,
     while (!stop) {
       auto m = (*c)->nextStream(std::chrono::milliseconds(200));
       if (!m) {
-        if ((*c)->broken()) return error("mirror: " + m.error().message);
+        if (!(*c)->timedOut()) {
+          return error("mirror: " + m.error().message);
+        }
         continue;
       }
       const auto* u = std::get_if<vog::api::GraphUpdate>(&*m);
@@ -173,8 +175,14 @@ VOG_BENCH_COMMAND(console,
       next += std::chrono::duration_cast<Clock::duration>(poll_period);
       std::this_thread::sleep_until(next);
       vog::api::MapMirror whole;
-      if (auto st = (*d)->fetchMap(deltas); !st) return error("deltas: " + st.error().message);
-      if (auto st = (*f)->fetchMap(whole); !st) return error("full maps: " + st.error().message);
+      // Before the first closed submap there is no map (UNAVAILABLE): nothing to fetch yet.
+      const auto fetch = [](vog::client::ApiClient& c, vog::api::MapMirror& m) -> vog::Status {
+        vog::Status st = c.fetchMap(m);
+        if (!st && c.lastServerError().code == vog::v1::ERROR_CODE_UNAVAILABLE && !c.broken()) return {};
+        return st;
+      };
+      if (auto st = fetch(**d, deltas); !st) return error("deltas: " + st.error().message);
+      if (auto st = fetch(**f, whole); !st) return error("full maps: " + st.error().message);
       const std::lock_guard lock(mutex);
       delta_bytes = (*d)->bytesReceived();
       full_bytes = (*f)->bytesReceived();

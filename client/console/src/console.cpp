@@ -176,7 +176,11 @@ Status Console::session(client::ApiClient& c) {
     auto m = c.nextStream(100ms);
     if (!m) {
       if (c.broken()) return m.error();
-      continue;  // no message within the wait, or an error frame the server did not close on
+      if (!c.timedOut()) {  // a message that did not decode, or an error frame the server did not close on
+        const std::lock_guard lock(mutex_);
+        eventLocked("warning", "from vogd: " + m.error().message);
+      }
+      continue;
     }
     if (auto* g = std::get_if<api::GraphUpdate>(&*m)) {
       if (Status st = onGraph(c, *g); !st) return st;

@@ -11,6 +11,23 @@ namespace vog::api {
 
 namespace {
 
+// A rotation about z alone: r02, r12, r20, r21 zero (of either sign) and r22 = 1.0. Its pose travels as
+// 7 doubles (r00 r01 r10 r11 tx ty tz) and a form: bit 0 set, bits 1-4 the signs of r02, r12, r20, r21
+// (set: -0.0), so it is rebuilt bit for bit. Form 0: the 12 doubles.
+constexpr int kZeros[4][2] = {{0, 2}, {1, 2}, {2, 0}, {2, 1}};
+
+std::uint32_t poseForm(const geometry::Pose3& T) {
+  const auto& m = T.matrix();
+  if (m(2, 2) != 1.0) return 0;
+  std::uint32_t form = 1;
+  for (int k = 0; k < 4; ++k) {
+    const double v = m(kZeros[k][0], kZeros[k][1]);
+    if (v != 0.0) return 0;
+    if (std::signbit(v)) form |= 2u << k;
+  }
+  return form;
+}
+
 bool samePose(const geometry::Pose3& a, const geometry::Pose3& b) {
   return std::memcmp(a.matrix().data(), b.matrix().data(), sizeof(double) * 16) == 0;
 }
@@ -94,9 +111,16 @@ void toProto(const GraphUpdate& update, v1::GraphUpdate& out) {
   out.set_stamp_ns(update.stamp_ns);
   out.mutable_submap_ids()->Reserve(static_cast<int>(update.submaps.size()));
   out.mutable_poses()->Reserve(static_cast<int>(12 * update.submaps.size()));
+  out.mutable_pose_form()->Reserve(static_cast<int>(update.submaps.size()));
   for (const SubmapPose& p : update.submaps) {
     out.add_submap_ids(p.id);
     const auto& m = p.T_world_submap.matrix();
+    const std::uint32_t form = poseForm(p.T_world_submap);
+    out.add_pose_form(form);
+    if (form != 0) {
+      for (const double v : {m(0, 0), m(0, 1), m(1, 0), m(1, 1), m(0, 3), m(1, 3), m(2, 3)}) out.add_poses(v);
+      continue;
+    }
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) out.add_poses(m(r, c));
     }
@@ -114,12 +138,25 @@ Result<GraphUpdate> fromProto(const v1::GraphUpdate& in) {
   u.full = in.full();
   u.n_submaps = in.n_submaps();
   u.stamp_ns = in.stamp_ns();
-  if (in.poses_size() != 12 * in.submap_ids_size()) {
+  if (in.pose_form_size() != in.submap_ids_size()) {
+    return Error{"graph_update.pose_form has " + std::to_string(in.pose_form_size()) + " entries for " +
+                 std::to_string(in.submap_ids_size()) + " submap ids"};
+  }
+  int doubles = 0;
+  for (int i = 0; i < in.pose_form_size(); ++i) {
+    if (in.pose_form(i) > 31 || (in.pose_form(i) != 0 && (in.pose_form(i) & 1) == 0)) {
+      return Error{"graph_update.pose_form " + std::to_string(in.pose_form(i)) + " is not a pose form"};
+    }
+    doubles += in.pose_form(i) != 0 ? 7 : 12;
+  }
+  if (in.poses_size() != doubles) {
     return Error{"graph_update.poses holds " + std::to_string(in.poses_size()) + " doubles for " +
-                 std::to_string(in.submap_ids_size()) + " submap ids (12 each)"};
+                 std::to_string(in.submap_ids_size()) + " submap ids (" + std::to_string(doubles) +
+                 " expected: 12 each, 7 for a yaw-only pose)"};
   }
   if (in.closures_size() % 2 != 0) return Error{"graph_update.closures holds an odd number of submap ids"};
   u.submaps.resize(static_cast<std::size_t>(in.submap_ids_size()));
+  int at = 0;
   for (int i = 0; i < in.submap_ids_size(); ++i) {
     SubmapPose& p = u.submaps[static_cast<std::size_t>(i)];
     p.id = in.submap_ids(i);
@@ -128,13 +165,22 @@ Result<GraphUpdate> fromProto(const v1::GraphUpdate& in) {
     }
     auto& m = p.T_world_submap.matrix();
     m.setIdentity();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) {
-        const double v = in.poses(12 * i + 4 * r + c);
-        if (!std::isfinite(v)) return Error{"graph_update: submap " + std::to_string(p.id) + "'s pose is not finite"};
-        m(r, c) = v;
+    const auto next = [&]() { return in.poses(at++); };
+    if (const std::uint32_t form = in.pose_form(i); form != 0) {
+      for (int k = 0; k < 4; ++k) m(kZeros[k][0], kZeros[k][1]) = (form & (2u << k)) != 0 ? -0.0 : 0.0;
+      m(0, 0) = next();
+      m(0, 1) = next();
+      m(1, 0) = next();
+      m(1, 1) = next();
+      m(0, 3) = next();
+      m(1, 3) = next();
+      m(2, 3) = next();
+    } else {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 4; ++c) m(r, c) = next();
       }
     }
+    if (!m.allFinite()) return Error{"graph_update: submap " + std::to_string(p.id) + "'s pose is not finite"};
     const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
     if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || R.determinant() < 0.0) {
       return Error{"graph_update: submap " + std::to_string(p.id) + "'s pose has no rotation matrix"};

@@ -76,6 +76,26 @@ TEST(GraphUpdate, CarriesOnlyNewAndMovedPosesAndReproducesTheGraphBitForBit) {
   EXPECT_TRUE(graphUpdate(&v2, v3).closures.empty());
 }
 
+TEST(GraphUpdate, YawOnlyPosesTravelAsSevenDoublesAndComeBackBitForBit) {
+  GraphState planar;
+  planar.version = 4;
+  for (int i = 0; i < 50; ++i) {
+    planar.submaps.push_back(
+        {static_cast<std::uint32_t>(i), geometry::poseFromXyzRpy(0.37 * i, -1.1 * i, -2.5, 0.0, 0.0, 0.13 * i - 3.0)});
+  }
+  planar.submaps[7].T_world_submap = geometry::poseFromXyzRpy(1, 2, 3, 0.001, 0.0, 0.5);  // tilted: 12 doubles
+  v1::GraphUpdate p;
+  toProto(graphUpdate(nullptr, planar), p);
+  EXPECT_EQ(p.poses_size(), 49 * 7 + 12);
+  GraphState back;
+  ASSERT_TRUE(applyGraphUpdate(back, fromProto(p).value()).ok());
+  EXPECT_TRUE(bitEqual(back, planar));
+  // What a loop closure moving every planar submap costs per submap on the wire.
+  v1::Envelope e;
+  *e.mutable_graph_update() = p;
+  EXPECT_LT(static_cast<double>(e.ByteSizeLong() + 4) / 50.0, 70.0);
+}
+
 TEST(GraphUpdate, AnUpdateForAnotherVersionIsRefusedAndAShrunkGraphIsSentWhole) {
   const GraphState v1 = chain(1, 5);
   const GraphState v2 = chain(2, 6);
@@ -122,6 +142,13 @@ TEST(GraphUpdate, WhatArrivesIsChecked) {
   v1::GraphUpdate odd = p;
   odd.add_closures(1);
   EXPECT_NE(fromProto(odd).error().message.find("odd"), std::string::npos);
+
+  v1::GraphUpdate flags = p;
+  flags.mutable_pose_form()->RemoveLast();
+  EXPECT_NE(fromProto(flags).error().message.find("pose_form"), std::string::npos);
+  v1::GraphUpdate form = p;
+  form.set_pose_form(0, 6);
+  EXPECT_NE(fromProto(form).error().message.find("not a pose form"), std::string::npos);
 
   v1::GraphUpdate count = p;
   count.set_n_submaps(4);

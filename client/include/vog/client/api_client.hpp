@@ -90,8 +90,10 @@ class ApiClient {
   // gathered, then applied at once (the mirror is unchanged when anything fails).
   Status fetchMap(api::MapMirror& mirror, const ProgressFn& progress = {}, std::uint32_t max_blocks_per_chunk = 0);
 
-  // The next stream message (buffered first), or an error after `timeout`.
+  // The next stream message (buffered first), or an error after `timeout` (timedOut() says which).
   Result<StreamMessage> nextStream(std::chrono::milliseconds timeout);
+  // The last receive() or nextStream() failed only because nothing arrived in time.
+  bool timedOut() const { return timed_out_; }
   std::size_t droppedStreams() const { return dropped_streams_; }
   // Bytes read from the connection so far (TLS: the decrypted bytes), for link budgets.
   std::uint64_t bytesReceived() const { return bytes_received_; }
@@ -128,6 +130,7 @@ class ApiClient {
   std::deque<v1::Envelope> streams_;
   std::size_t dropped_streams_ = 0;
   std::uint64_t bytes_received_ = 0;
+  bool timed_out_ = false;
   ServerError last_server_error_;
   bool broken_ = false;
 };
