@@ -500,6 +500,7 @@ const MAX_FRAME_SAMPLES = 5000;
 const startedAt = performance.now();
 let lastFrame = null;
 let maxFrameMs = 0;
+const poseLatencies = []; // ms from vogd publishing a pose to the frame that drew it
 let fpsCount = 0, fpsAt = performance.now();
 let lastResolution = 0;
 let lastInterval = null;
@@ -567,6 +568,8 @@ function frame(now) {
     renderer.render(scene, camera);
     if (state.pendingPoseStamp) {
       state.poseLatencyMs = Math.round(Date.now() - state.pendingPoseStamp);
+      poseLatencies.push(Date.now() - state.pendingPoseStamp);
+      if (poseLatencies.length > 100000) poseLatencies.shift();
       state.pendingPoseStamp = null;
       setText('pose-latency', `${state.poseLatencyMs} ms`);
     }
@@ -601,6 +604,7 @@ window.vogConsole = {
   frameTimes: () => frameIntervals.slice(),
   slowFrames: () => slowFrames.slice(),
   poseLatencyMs: () => state.poseLatencyMs,
+  poseLatencies: () => poseLatencies.slice(),
   verifyVoxels: () => voxels.verify(),
   renderer,
   camera,
