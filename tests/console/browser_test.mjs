@@ -7,12 +7,9 @@
 // Prints one line per check (PASS/FAIL/SKIP + detail), writes a JSON summary and exits 1 if a check failed.
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { createRequire } from 'node:module';
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const require = createRequire(path.resolve(here, '../../client/console/web/package.json'));
-const { chromium } = require('playwright-core');
+import { launchChromium } from './chromium.mjs';
+
 
 // ------------------------------------------------------------------------------------------ options
 
@@ -109,13 +106,7 @@ const pageErrors = [];
 const consoleErrors = [];
 
 async function main() {
-  browser = await chromium.launch({
-    executablePath: opt.chromium,
-    headless: true,
-    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-      '--disable-component-update', '--disable-sync', '--use-gl=angle', '--use-angle=swiftshader',
-      '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  });
+  browser = await launchChromium(opt.chromium);
   const context = await browser.newContext({ viewport: { width: 1440, height: 860 } });
   const page = await context.newPage();
   page.on('pageerror', (e) => pageErrors.push(String(e && e.message ? e.message : e)));

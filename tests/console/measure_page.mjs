@@ -5,13 +5,7 @@
 //   node tests/console/measure_page.mjs --url http://127.0.0.1:PORT/ --json out.json [--screenshot out.png]
 //        [--seconds S] [--chromium /usr/bin/chromium]
 import fs from 'node:fs';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { createRequire } from 'node:module';
-
-const here = path.dirname(fileURLToPath(import.meta.url));
-const require = createRequire(path.resolve(here, '../../client/console/web/package.json'));
-const { chromium } = require('playwright-core');
+import { launchChromium } from './chromium.mjs';
 
 const opt = { chromium: '/usr/bin/chromium', seconds: 0 };
 for (let i = 2; i < process.argv.length; i += 2) opt[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
@@ -28,13 +22,7 @@ function percentile(values, p) {
   return v[lo] + (v[Math.min(lo + 1, v.length - 1)] - v[lo]) * (at - lo);
 }
 
-const browser = await chromium.launch({
-  executablePath: opt.chromium,
-  headless: true,
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--use-gl=angle', '--use-angle=swiftshader',
-    '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchChromium(opt.chromium, false);
 const page = await browser.newPage({ viewport: { width: 1440, height: 860 } });
 const errors = [];
 page.on('pageerror', (e) => errors.push(String(e)));
