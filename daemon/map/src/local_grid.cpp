@@ -1,6 +1,7 @@
 #include "vog/map/local_grid.hpp"
 
 #include "vog/core/atomic_file.hpp"
+#include "vog/map/octree_file.hpp"
 
 #include <nanoflann.hpp>
 #include <octomap/OcTree.h>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <cassert>
 #include <bit>
+#include <fstream>
 #include <sstream>
 #include <unordered_map>
 
@@ -75,20 +77,18 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::fromTree(const GridConfig& config,
 }
 
 Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, const std::filesystem::path& ot_file) {
-  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(ot_file.string()));
-  auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
-  if (tree == nullptr) return Error{"cannot read an OcTree from " + ot_file.string()};
-  any.release();
-  return fromTree(config, std::unique_ptr<octomap::OcTree>(tree));
+  std::ifstream in(ot_file, std::ios::binary);
+  if (!in) return Error{"cannot open " + ot_file.string()};
+  auto tree = readOcTree(in);
+  if (!tree) return Error{ot_file.string() + ": " + tree.error().message};
+  return fromTree(config, std::move(tree).value());
 }
 
 Result<std::unique_ptr<LocalGrid>> LocalGrid::deserialize(const GridConfig& config, std::string_view ot_bytes) {
   std::istringstream in{std::string(ot_bytes)};
-  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
-  auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
-  if (tree == nullptr) return Error{"the bytes are not an OctoMap .ot file of an OcTree"};
-  any.release();
-  return fromTree(config, std::unique_ptr<octomap::OcTree>(tree));
+  auto tree = readOcTree(in);
+  if (!tree) return tree.error();
+  return fromTree(config, std::move(tree).value());
 }
 
 Result<std::string> LocalGrid::serialize() const {

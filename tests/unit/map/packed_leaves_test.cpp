@@ -1,6 +1,7 @@
 #include "vog/map/packed_leaves.hpp"
 
 #include "vog/map/local_grid.hpp"
+#include "vog/map/octree_file.hpp"
 
 #include "synthetic_scene.hpp"
 #include "test_support.hpp"
@@ -174,6 +175,34 @@ TEST(PackedLeaves, WritesTheOcTreeFileOctoMapReadsAndWritesUnchanged) {
   // An empty tree: the header alone.
   octomap::OcTree empty(0.095);
   EXPECT_EQ(PackedLeaves{}.writeOcTree(0.095), octomapBytes(empty));
+}
+
+// readOcTree reads what OctoMap writes into the same tree, and names what is wrong with a bad stream.
+TEST(PackedLeaves, ReadOcTreeReadsOctoMapsFilesAndNamesWhatIsWrong) {
+  const auto read = [](const std::string& bytes) {
+    std::istringstream in(bytes, std::ios_base::in | std::ios_base::binary);
+    return readOcTree(in);
+  };
+  std::mt19937_64 rng(31);
+  const std::string bytes = PackedLeaves::pack(randomLeaves(rng, 8, 30)).writeOcTree(0.095);
+  auto tree = read(bytes);
+  ASSERT_TRUE(tree.ok()) << tree.error().message;
+  EXPECT_EQ(octomapBytes(**tree), bytes);
+  EXPECT_EQ((*tree)->getResolution(), 0.095);
+  auto empty = read(octomapBytes(octomap::OcTree(0.2)));
+  ASSERT_TRUE(empty.ok()) << empty.error().message;
+  EXPECT_EQ((*empty)->size(), 0u);
+
+  const auto error = [&](const std::string& b) {
+    auto r = read(b);
+    return r.ok() ? std::string("(read)") : r.error().message;
+  };
+  EXPECT_NE(error(bytes.substr(0, bytes.size() - 7)).find("truncated"), std::string::npos);
+  EXPECT_NE(error("GIF89a").find("not an OctoMap .ot stream"), std::string::npos);
+  std::string other = bytes;
+  other.replace(other.find("id OcTree"), 9, "id ColorOcTree");
+  EXPECT_NE(error(other).find("ColorOcTree"), std::string::npos);
+  EXPECT_NE(error(bytes.substr(0, bytes.find("data"))).find("no \"data\""), std::string::npos);
 }
 
 // A grid built from sonar scans: after finalize() (which drops the tree) its file, its leaves and

@@ -6,6 +6,8 @@
 #include "vog/core/result.hpp"
 
 #include <filesystem>
+#include <istream>
+#include <memory>
 
 namespace octomap {
 class OcTree;
@@ -20,5 +22,9 @@ enum class OcTreeFormat {
 
 // kBinary turns `tree` into its maximum-likelihood form and prunes it first (OcTree::writeBinary).
 Status writeOcTreeFile(octomap::OcTree& tree, const std::filesystem::path& file, OcTreeFormat format);
+
+// Reads an .ot stream of an OcTree (header, then the tree's data), with an error that names what was
+// wrong (OctoMap's own reader prints its progress to stderr and returns null on any failure).
+Result<std::unique_ptr<octomap::OcTree>> readOcTree(std::istream& in);
 
 }  // namespace vog::map
