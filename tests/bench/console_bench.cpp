@@ -136,12 +136,7 @@ VOG_BENCH_COMMAND(console,
       const auto* u = std::get_if<vog::api::GraphUpdate>(&*m);
       if (u == nullptr) continue;
       const std::size_t wire = wireBytes(*u);
-      std::size_t moved = 0;
-      for (const auto& p : u->submaps) {
-        bool held = false;
-        for (const auto& h : mirror.graph().submaps) held = held || h.id == p.id;
-        moved += held ? 1 : 0;
-      }
+      const std::size_t moved = u->moved.size();
       if (auto st = mirror.applyGraph(*u); !st) return error("mirror: " + st.error().message);
       const std::uint64_t before = (*c)->bytesReceived();
       for (const std::uint32_t id : mirror.missingGrids()) {
@@ -155,7 +150,7 @@ VOG_BENCH_COMMAND(console,
       ++graph_updates;
       if (!u->full && moved > 0) {
         moved_submaps += moved;
-        bytes_per_moved.push_back(static_cast<double>(wire) / static_cast<double>(u->submaps.size()));
+        bytes_per_moved.push_back(static_cast<double>(wire) / static_cast<double>(moved));
       }
       mirror_bytes = (*c)->bytesReceived();
       mirror_graph_version = mirror.graph().version;

@@ -7,7 +7,8 @@
 #      enabled nor started, `vogd --check-config` on /etc/vogd/vogd.yaml as the vogd user,
 #      `systemd-analyze verify` (prints nothing) and `security` (exposure <= 3.0) on the installed unit;
 #   3. the installed vogd run as the vogd user on the simulator (the installed scenes) for a few
-#      submaps, queried with the installed vogctl (status, a map snapshot), stopped with SIGTERM;
+#      submaps, queried with the installed vogctl (status, a map snapshot) and watched with the
+#      installed vog-console (its installed page and three.js served, its mirror filled), stopped with SIGTERM;
 #   4. the service enabled, then dpkg --purge: no file of the packages and nothing vogd made is left, except the missions.
 # Usage: install_test.sh PACKAGE_DIR (vogd_*.deb, vog-tools_*.deb, vog-sim_*.deb)
 set -euo pipefail
@@ -21,8 +22,10 @@ step() { echo "-- $*"; }
 work=$(mktemp -d)
 chmod 755 "$work"
 vogd_pid=""
+console_pid=""
 cleanup() {
   [ -n "$vogd_pid" ] && kill "$vogd_pid" 2> /dev/null || true
+  [ -n "$console_pid" ] && kill "$console_pid" 2> /dev/null || true
   dpkg --purge vogd vog-tools vog-sim > /dev/null 2>&1 || true
   rm -rf /var/lib/vogd/missions/package-test /var/lib/vogd/missions/older
   rmdir /var/lib/vogd/missions /var/lib/vogd 2> /dev/null || true
@@ -55,8 +58,9 @@ grep -q '^  max_submaps: 77 ' /etc/vogd/vogd.yaml || fail "the upgrade replaced 
 [ -s /var/lib/vogd/missions/older/journal.bin ] || fail "the upgrade lost a mission"
 
 step "installed files, user, directories, service state"
-for f in /usr/bin/vogd /usr/bin/vogctl /usr/bin/vogsim; do [ -x "$f" ] || fail "$f missing"; done
+for f in /usr/bin/vogd /usr/bin/vogctl /usr/bin/vog-console /usr/bin/vogsim; do [ -x "$f" ] || fail "$f missing"; done
 [ -s /usr/share/vog/scenes/pilings.yaml ] || fail "scenes missing"
+[ -s /usr/share/vog/console/index.html ] || fail "the console's page missing"
 id -nG vogd | grep -qw dialout || fail "user vogd is not in dialout"
 [ "$(stat -c '%a %U %G' /var/lib/vogd)" = "750 vogd vogd" ] || fail "/var/lib/vogd is $(stat -c '%a %U %G' /var/lib/vogd)"
 [ "$(systemctl is-enabled vogd.service 2>&1 || true)" = disabled ] \
@@ -106,9 +110,42 @@ done
 [ "${submaps:-0}" -ge 3 ] || { echo "$line"; fail "vogd made ${submaps:-0} submaps in 120 s"; }
 vogctl snapshot --out "$work/map.bt" --port "$port" > /dev/null
 head -c 64 "$work/map.bt" | grep -q "Octomap" || fail "the snapshot is not an OctoMap file"
+
+# The installed vog-console (as an unprivileged user) serves its installed page and mirrors the map.
+install -d -o nobody "$work/console"
+setpriv --reuid=nobody --regid=nogroup --clear-groups vog-console --port "$port" --listen 127.0.0.1:0 \
+  --port-file "$work/console/port" 2> "$work/console.log" &
+console_pid=$!
+for _ in $(seq 1 100); do [ -s "$work/console/port" ] && break; sleep 0.1; done
+[ -s "$work/console/port" ] || { tail -20 "$work/console.log"; fail "vog-console did not start"; }
+console_check=$(/usr/bin/python3 - "$(cat "$work/console/port")" <<'PY'
+import json, sys, time, urllib.request
+base = f"http://127.0.0.1:{sys.argv[1]}"
+def get(path):
+    with urllib.request.urlopen(base + path, timeout=5) as r:
+        return r.status, r.read()
+for path in ("/", "/app.js", "/node_modules/three/build/three.module.js",
+             "/node_modules/three/build/three.core.js", "/node_modules/three/examples/jsm/controls/OrbitControls.js"):
+    status, body = get(path)
+    if status != 200 or not body:
+        sys.exit(f"{path}: HTTP {status}, {len(body)} bytes")
+for _ in range(100):
+    state = json.loads(get("/api/state")[1])
+    if state["mirror"]["submaps"] >= 1 and state["mirror"]["occupied"] > 0:
+        print(f"page served, mirror {state['mirror']['submaps']} submaps, {state['mirror']['occupied']} occupied voxels")
+        sys.exit(0)
+    time.sleep(0.2)
+sys.exit(f"the mirror holds nothing after 20 s: {state}")
+PY
+) || { tail -20 "$work/console.log"; kill "$console_pid"; fail "the installed vog-console: $console_check"; }
+kill -TERM "$console_pid"
+wait "$console_pid" || { tail -20 "$work/console.log"; fail "vog-console did not stop cleanly on SIGTERM"; }
+console_pid=""
+echo "   vog-console: $console_check"
 kill -TERM "$vogd_pid"
 wait "$vogd_pid" || { tail -20 "$work/vogd.log"; fail "vogd did not stop cleanly on SIGTERM"; }
 vogd_pid=""
+console_pid=""
 rm -f /var/lib/vogd/port
 ls /var/lib/vogd/missions/package-test/ | grep -q . || fail "the mission folder is empty"
 echo "   $submaps submaps, snapshot $(stat -c %s "$work/map.bt") bytes, mission in /var/lib/vogd/missions/package-test"

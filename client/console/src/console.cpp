@@ -236,13 +236,18 @@ Status Console::session(client::ApiClient& c) {
 }
 
 Status Console::onGraph(client::ApiClient& c, const api::GraphUpdate& update) {
+  // What the pages are told: the update with the poses it set (moved ones resolved against the held).
   api::GraphUpdate applied = update;
-  if (Status st = mirror_.applyGraph(update); !st) {
+  auto set = mirror_.applyGraph(update);
+  if (!set) {
     auto full = c.graph();
     if (!full) return full.error();
-    if (Status again = mirror_.applyGraph(*full); !again) return again;
+    set = mirror_.applyGraph(*full);
+    if (!set) return set.error();
     applied = std::move(full).value();
   }
+  applied.submaps = std::move(set).value();
+  applied.moved.clear();
   for (const std::uint32_t id : mirror_.missingGrids()) {
     auto grid = c.fetchSubmap(id);
     if (!grid) {

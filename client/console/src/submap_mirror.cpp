@@ -4,7 +4,9 @@
 
 namespace vog::console {
 
-Status SubmapMirror::applyGraph(const api::GraphUpdate& update) { return api::applyGraphUpdate(graph_, update); }
+Result<std::vector<api::SubmapPose>> SubmapMirror::applyGraph(const api::GraphUpdate& update) {
+  return api::applyGraphUpdate(graph_, update);
+}
 
 std::vector<std::uint32_t> SubmapMirror::missingGrids() const {
   std::vector<std::uint32_t> out;

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -32,6 +33,58 @@ bool samePose(const geometry::Pose3& a, const geometry::Pose3& b) {
   return std::memcmp(a.matrix().data(), b.matrix().data(), sizeof(double) * 16) == 0;
 }
 
+std::uint64_t bitsOf(double v) { return std::bit_cast<std::uint64_t>(v); }
+
+PoseChange poseChange(std::uint32_t id, const geometry::Pose3& held, const geometry::Pose3& now) {
+  PoseChange c;
+  c.id = id;
+  for (int k = 0; k < 12; ++k) c.bits_xor[k] = bitsOf(held.matrix()(k / 4, k % 4)) ^ bitsOf(now.matrix()(k / 4, k % 4));
+  return c;
+}
+
+Status checkPose(std::uint32_t id, const geometry::Pose3& T) {
+  const auto& m = T.matrix();
+  if (!m.allFinite()) return Error{"graph_update: submap " + std::to_string(id) + "'s pose is not finite"};
+  const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
+  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || R.determinant() < 0.0) {
+    return Error{"graph_update: submap " + std::to_string(id) + "'s pose has no rotation matrix"};
+  }
+  return {};
+}
+
+// A change on the wire: 6 bytes of 12 nibbles (double k in nibble k, low nibble first), each the count of
+// leading zero bytes of its XOR (0-8), then each XOR's remaining low bytes, most significant first.
+void encodeChange(const PoseChange& c, std::string& out) {
+  const std::size_t header = out.size();
+  out.append(6, '\0');
+  for (int k = 0; k < 12; ++k) {
+    const int zeros = std::countl_zero(c.bits_xor[k]) / 8;
+    out[header + k / 2] = static_cast<char>(out[header + k / 2] | (zeros << (k % 2 == 0 ? 0 : 4)));
+    for (int b = 7 - zeros; b >= 0; --b) out.push_back(static_cast<char>((c.bits_xor[k] >> (8 * b)) & 0xFF));
+  }
+}
+
+Result<PoseChange> decodeChange(std::uint32_t id, std::string_view bytes, std::size_t& at) {
+  PoseChange c;
+  c.id = id;
+  if (bytes.size() - at < 6) return Error{"graph_update.pose_changes ends inside submap " + std::to_string(id)};
+  const std::size_t header = at;
+  at += 6;
+  for (int k = 0; k < 12; ++k) {
+    const int zeros = (static_cast<unsigned char>(bytes[header + k / 2]) >> (k % 2 == 0 ? 0 : 4)) & 0xF;
+    if (zeros > 8) {
+      return Error{"graph_update.pose_changes: submap " + std::to_string(id) + " says " + std::to_string(zeros) +
+                   " leading zero bytes (at most 8)"};
+    }
+    const auto n = static_cast<std::size_t>(8 - zeros);
+    if (bytes.size() - at < n) return Error{"graph_update.pose_changes ends inside submap " + std::to_string(id)};
+    std::uint64_t x = 0;
+    for (std::size_t b = 0; b < n; ++b) x = (x << 8) | static_cast<unsigned char>(bytes[at++]);
+    c.bits_xor[k] = x;
+  }
+  return c;
+}
+
 GraphUpdate fullUpdate(const GraphState& now) {
   GraphUpdate u;
   u.version = now.version;
@@ -57,50 +110,64 @@ GraphUpdate graphUpdate(const GraphState* held, const GraphState& now) {
   u.n_submaps = static_cast<std::uint32_t>(now.submaps.size());
   for (std::size_t i = 0; i < now.submaps.size(); ++i) {
     const SubmapPose& p = now.submaps[i];
-    if (i < held->submaps.size()) {
-      if (held->submaps[i].id != p.id) return fullUpdate(now);
-      if (samePose(held->submaps[i].T_world_submap, p.T_world_submap)) continue;
+    if (i >= held->submaps.size()) {
+      u.submaps.push_back(p);
+      continue;
     }
-    u.submaps.push_back(p);
+    const SubmapPose& h = held->submaps[i];
+    if (h.id != p.id) return fullUpdate(now);
+    if (!samePose(h.T_world_submap, p.T_world_submap))
+      u.moved.push_back(poseChange(p.id, h.T_world_submap, p.T_world_submap));
   }
   u.closures.assign(now.closures.begin() + static_cast<std::ptrdiff_t>(held->closures.size()), now.closures.end());
   return u;
 }
 
-Status applyGraphUpdate(GraphState& held, const GraphUpdate& update) {
+Result<std::vector<SubmapPose>> applyGraphUpdate(GraphState& held, const GraphUpdate& update) {
   if (update.full) {
     held.version = update.version;
     held.stamp_ns = update.stamp_ns;
     held.submaps = update.submaps;
     held.closures = update.closures;
-    return {};
+    return held.submaps;
   }
+  const auto resynchronise = [&](const std::string& why) {
+    return Error{"graph update from version " + std::to_string(update.base_version) + " to " +
+                 std::to_string(update.version) + ": " + why + ": resynchronise (GetGraph)"};
+  };
   if (update.base_version != held.version) {
-    return Error{"graph update from version " + std::to_string(update.base_version) + " does not apply to version " +
-                 std::to_string(held.version) + ": resynchronise (GetGraph)"};
+    return resynchronise("it does not apply to version " + std::to_string(held.version));
   }
-  std::vector<SubmapPose> merged;
-  merged.reserve(std::max<std::size_t>(held.submaps.size(), update.n_submaps));
-  auto h = held.submaps.begin();
-  auto n = update.submaps.begin();
-  while (h != held.submaps.end() || n != update.submaps.end()) {
-    if (n == update.submaps.end() || (h != held.submaps.end() && h->id < n->id)) {
-      merged.push_back(*h++);
-    } else {
-      if (h != held.submaps.end() && h->id == n->id) ++h;
-      merged.push_back(*n++);
+  // The held poses with the changes applied, then the new submaps after them.
+  std::vector<SubmapPose> submaps = held.submaps;
+  std::vector<SubmapPose> set;
+  set.reserve(update.moved.size() + update.submaps.size());
+  auto h = submaps.begin();
+  for (const PoseChange& c : update.moved) {
+    h = std::lower_bound(h, submaps.end(), c.id, [](const SubmapPose& p, std::uint32_t id) { return p.id < id; });
+    if (h == submaps.end() || h->id != c.id) return resynchronise("submap " + std::to_string(c.id) + " is not held");
+    auto& m = h->T_world_submap.matrix();
+    for (int k = 0; k < 12; ++k) m(k / 4, k % 4) = std::bit_cast<double>(bitsOf(m(k / 4, k % 4)) ^ c.bits_xor[k]);
+    if (Status st = checkPose(c.id, h->T_world_submap); !st) return st.error();
+    set.push_back(*h);
+  }
+  for (const SubmapPose& p : update.submaps) {
+    if (!submaps.empty() && p.id <= submaps.back().id) {
+      return resynchronise("new submap " + std::to_string(p.id) + " is not after the held ones");
     }
+    submaps.push_back(p);
+    set.push_back(p);
   }
-  if (merged.size() != update.n_submaps) {
-    return Error{"graph update to version " + std::to_string(update.version) + " gives " +
-                 std::to_string(merged.size()) + " submaps, it says " + std::to_string(update.n_submaps) +
-                 ": resynchronise (GetGraph)"};
+  if (submaps.size() != update.n_submaps) {
+    return resynchronise("it gives " + std::to_string(submaps.size()) + " submaps, it says " +
+                         std::to_string(update.n_submaps));
   }
-  held.submaps = std::move(merged);
+  held.submaps = std::move(submaps);
   held.closures.insert(held.closures.end(), update.closures.begin(), update.closures.end());
   held.version = update.version;
   held.stamp_ns = update.stamp_ns;
-  return {};
+  std::sort(set.begin(), set.end(), [](const SubmapPose& a, const SubmapPose& b) { return a.id < b.id; });
+  return set;
 }
 
 void toProto(const GraphUpdate& update, v1::GraphUpdate& out) {
@@ -125,6 +192,12 @@ void toProto(const GraphUpdate& update, v1::GraphUpdate& out) {
       for (int c = 0; c < 4; ++c) out.add_poses(m(r, c));
     }
   }
+  std::string changes;
+  for (const PoseChange& c : update.moved) {
+    out.add_changed_ids(c.id);
+    encodeChange(c, changes);
+  }
+  out.set_pose_changes(std::move(changes));
   for (const ClosurePair& c : update.closures) {
     out.add_closures(c.from);
     out.add_closures(c.to);
@@ -180,11 +253,21 @@ Result<GraphUpdate> fromProto(const v1::GraphUpdate& in) {
         for (int c = 0; c < 4; ++c) m(r, c) = next();
       }
     }
-    if (!m.allFinite()) return Error{"graph_update: submap " + std::to_string(p.id) + "'s pose is not finite"};
-    const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
-    if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || R.determinant() < 0.0) {
-      return Error{"graph_update: submap " + std::to_string(p.id) + "'s pose has no rotation matrix"};
+    if (Status st = checkPose(p.id, p.T_world_submap); !st) return st.error();
+  }
+  if (u.full && in.changed_ids_size() != 0) return Error{"graph_update: a full update with pose changes"};
+  std::size_t read = 0;
+  for (int i = 0; i < in.changed_ids_size(); ++i) {
+    if (i > 0 && in.changed_ids(i) <= in.changed_ids(i - 1)) {
+      return Error{"graph_update.changed_ids are not ascending at index " + std::to_string(i)};
     }
+    auto c = decodeChange(in.changed_ids(i), in.pose_changes(), read);
+    if (!c) return c.error();
+    u.moved.push_back(*c);
+  }
+  if (read != in.pose_changes().size()) {
+    return Error{"graph_update.pose_changes holds " + std::to_string(in.pose_changes().size() - read) +
+                 " bytes after the last change"};
   }
   u.closures.resize(static_cast<std::size_t>(in.closures_size() / 2));
   for (std::size_t i = 0; i < u.closures.size(); ++i) {

@@ -132,8 +132,8 @@ std::shared_ptr<const api::GraphState> MappingStage::graphOf(const MappingState&
   if (!s.records.empty()) g->stamp_ns = s.records.back().last_stamp_ns;
   // Unchanged (a publication without a new submap or a moved pose) keeps the version.
   const std::shared_ptr<const MappingState> before = state();
-  if (before && before->graph && api::graphUpdate(before->graph.get(), *g).submaps.empty() &&
-      before->graph->closures.size() == g->closures.size() && before->graph->submaps.size() == g->submaps.size()) {
+  if (before && before->graph && before->graph->closures.size() == g->closures.size() &&
+      before->graph->submaps.size() == g->submaps.size() && api::graphUpdate(before->graph.get(), *g).moved.empty()) {
     return before->graph;
   }
   g->version = ++graph_version_;

@@ -881,8 +881,8 @@ void followGraph(ApiClient& c, GraphState& held, std::uint64_t until_version, st
     ASSERT_TRUE(m.ok()) << m.error().message;
     const auto* u = std::get_if<GraphUpdate>(&*m);
     if (u == nullptr) continue;
-    if (moved != nullptr && !u->full) *moved += u->submaps.size();
-    const Status st = applyGraphUpdate(held, *u);
+    if (moved != nullptr && !u->full) *moved += u->submaps.size() + u->moved.size();
+    const auto st = applyGraphUpdate(held, *u);
     ASSERT_TRUE(st.ok()) << st.error().message;
   }
 }

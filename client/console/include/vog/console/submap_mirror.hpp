@@ -18,9 +18,9 @@ namespace vog::console {
 
 class SubmapMirror {
  public:
-  // A graph update; an error (the update does not follow the held version) leaves the graph as it was:
-  // resynchronise with a full one (GetGraph).
-  Status applyGraph(const api::GraphUpdate& update);
+  // A graph update; returns the poses it set (api::applyGraphUpdate). An error (the update does not
+  // follow the held version) leaves the graph as it was: resynchronise with a full one (GetGraph).
+  Result<std::vector<api::SubmapPose>> applyGraph(const api::GraphUpdate& update);
   const api::GraphState& graph() const { return graph_; }
 
   // The submaps of the graph whose grids are not held yet, ascending.
