@@ -114,7 +114,7 @@ head -c 64 "$work/map.bt" | grep -q "Octomap" || fail "the snapshot is not an Oc
 # The installed vog-console (as an unprivileged user) serves its installed page and mirrors the map.
 install -d -o nobody "$work/console"
 setpriv --reuid=nobody --regid=nogroup --clear-groups vog-console --port "$port" --listen 127.0.0.1:0 \
-  --port-file "$work/console/port" 2> "$work/console.log" &
+  --port-file "$work/console/port" > "$work/console.log" 2>&1 &
 console_pid=$!
 for _ in $(seq 1 100); do [ -s "$work/console/port" ] && break; sleep 0.1; done
 [ -s "$work/console/port" ] || { tail -20 "$work/console.log"; fail "vog-console did not start"; }
