@@ -1,5 +1,6 @@
 #include "vog/explore/exploration_controller.hpp"
 
+#include <cmath>
 #include <numbers>
 #include <utility>
 
@@ -57,6 +58,7 @@ Status ExplorationController::start(const geometry::Pose3& T_world_home, const m
   ending_ = Ending::kNone;
   reason_.clear();
   idle_plans_ = 0;
+  planned_at_.reset();
   return {};
 }
 
@@ -183,9 +185,18 @@ Result<StepOutput> ExplorationController::step(const StepInput& input) {
     case plan::PlanStatus::kNearHome: goHome(Ending::kComplete, *result, out); return out;
     case plan::PlanStatus::kExplore: break;
   }
+  // A vehicle seen idle at every step may still have moved in between (a caller that polls slower than
+  // the vehicle reaches its waypoints): only plans from where the last one was made count.
+  constexpr double kMovedM = 0.05, kTurnedRad = 0.02;
+  const bool moved = planned_at_ && ((now.p_world - planned_at_->p_world).norm() > kMovedM ||
+                                     std::abs(geometry::wrapAngle(now.yaw_rad - planned_at_->yaw_rad)) > kTurnedRad);
+  if (moved) idle_plans_ = 0;
+  planned_at_ = now;
   if (result->waypoints.empty() || ++idle_plans_ > config_.max_idle_plans) {
     end(Ending::kStalled,
-        "the planner answered " + std::to_string(idle_plans_) + " times without moving the vehicle: " + result->reason,
+        "the planner answered " + std::to_string(idle_plans_) + " times without moving the vehicle" +
+            (result->waypoints.empty() ? ", the last time with no waypoint" : "") +
+            (result->reason.empty() ? "" : ": " + result->reason),
         out);
     return out;
   }

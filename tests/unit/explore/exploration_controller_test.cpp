@@ -398,6 +398,27 @@ TEST(ExplorationController, PlansThatNeverMoveTheVehicleEndAsStalled) {
   }
 }
 
+// vogd polls its vehicle: one that reaches each plan's waypoints between two polls is idle at every
+// step, yet it moves, and a mission of many plans does not end as stalled.
+TEST(ExplorationController, AVehicleThatReachesEveryPlanBetweenStepsIsNotStalled) {
+  ExplorationConfig config = roomConfig();
+  config.max_idle_plans = 3;
+  auto c = ExplorationController::create(config).value();
+  SimVehicle v;
+  v.T = poseOf({-3.0, 0.0, -1.75}, kPi);
+  ASSERT_TRUE(c.start(v.T, kBox, 0, false).ok());
+  int plans = 0;
+  for (int i = 0; i < 12; ++i) {
+    const StepOutput out = c.step(v.input(halfRoom())).value();
+    if (out.event) break;
+    ASSERT_TRUE(out.waypoints.has_value() && !out.waypoints->empty());
+    ++plans;
+    v.T = poseOf(out.waypoints->back().p_world, out.waypoints->back().yaw_rad);  // reached before the next step
+  }
+  EXPECT_GT(plans, config.max_idle_plans);
+  EXPECT_NE(c.ending(), Ending::kStalled) << c.summary();
+}
+
 TEST(ExplorationController, RevisitsGoBackToAnOldViewWhenNoClosureAnchoredTheMapForTooLong) {
   ExplorationConfig config = roomConfig();
   config.revisits = true;

@@ -155,7 +155,8 @@ class ExplorationController {
   bool short_of_home_ = false;              // the way home sent ends near home, not at it (kNearHome)
   Ending ending_ = Ending::kNone;
   std::string reason_;
-  int idle_plans_ = 0;  // plans since the vehicle last moved
+  int idle_plans_ = 0;                        // plans since the vehicle last moved
+  std::optional<plan::Waypoint> planned_at_;  // where the vehicle was at the last plan
 };
 
 }  // namespace vog::explore
