@@ -6,6 +6,7 @@
 
 #include "vog/api/dispatcher.hpp"
 #include "vog/api/framing.hpp"
+#include "vog/api/graph.hpp"
 #include "vog/map/local_grid.hpp"
 
 #include <memory>
@@ -126,6 +127,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     checkReply(dispatcher.handle(e, observer));
     VOG_FUZZ_CHECK(observer.role == api::Role::kObserver);  // no way to become operator without the MAC
     checkReply(dispatcher.handle(e, op));
+    // What a client does with a graph update from the server: decoded (or refused with a reason), then
+    // applied to the graph it holds (or refused, leaving that graph as it was).
+    if (e.has_graph_update()) {
+      auto update = api::fromProto(e.graph_update());
+      if (!update) {
+        VOG_FUZZ_CHECK(!update.error().message.empty());
+        continue;
+      }
+      api::GraphState held = *backend.graph();
+      const api::GraphState before = held;
+      auto set = api::applyGraphUpdate(held, *update);
+      if (!set) {
+        VOG_FUZZ_CHECK(held.version == before.version && held.submaps.size() == before.submaps.size());
+      } else {
+        VOG_FUZZ_CHECK(held.version == update->version);
+        for (const api::SubmapPose& p : held.submaps) VOG_FUZZ_CHECK(p.T_world_submap.matrix().allFinite());
+      }
+    }
   }
   return 0;
 }
