@@ -166,8 +166,7 @@ Result<std::vector<SubmapPose>> applyGraphUpdate(GraphState& held, const GraphUp
   held.closures.insert(held.closures.end(), update.closures.begin(), update.closures.end());
   held.version = update.version;
   held.stamp_ns = update.stamp_ns;
-  std::sort(set.begin(), set.end(), [](const SubmapPose& a, const SubmapPose& b) { return a.id < b.id; });
-  return set;
+  return set;  // ascending: the changes' ids are, and every new id is after them
 }
 
 void toProto(const GraphUpdate& update, v1::GraphUpdate& out) {
