@@ -80,6 +80,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <numbers>
@@ -288,6 +289,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--revisit-span-s", revisit_config.anchor_span_s,
                  "vog-lc: a closure anchors when its submaps started this far apart, s");
   app.add_option("--lc-max-fitness", mc.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
+  app.add_option("--lc-probe-steps", mc.loop_closer.point_to_plane.probe_steps,
+                 "loop closures: shifts per side of the unique-optimum probe (0: no probe)");
+  app.add_option("--lc-probe-min-cost-points", mc.loop_closer.point_to_plane.min_probe_cost_points,
+                 "loop closures: correspondences' worth of cost every probe shift must add");
+  app.add_option("--lc-consistency", mc.consistency_confidence,
+                 "loop closures: confidence of the consistency check before insertion (0: off)");
   app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
                  "loop closures: share of the source cloud with a correspondence at the result");
   app.add_option_function<double>(
@@ -817,7 +824,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   struct ClosureRow {
     const slam::LoopClosure* closure;
     vog::eval::ClosureError error;
-    double correction_m;  // how far the registration moved the relative pose from its prior
+    double correction_m;        // how far the registration moved the relative pose from its prior
+    slam::Vector6d difference;  // registration - truth, (x, y, z, roll, pitch, yaw) in the older submap's frame
+    double from_true_yaw_rad;   // the older submap's true heading in the world
   };
   std::vector<ClosureRow> closure_rows;
   std::int64_t closures_wrong = 0;
@@ -871,7 +880,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
       const vog::eval::ClosureError e = vog::eval::closureError(lc, T_true);
       closures_wrong += e.wrong ? 1 : 0;
-      closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm()});
+      closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm(),
+                              slam::xyzRpyDifference(slam::toXyzRpy(lc.T_from_to), slam::toXyzRpy(T_true)),
+                              geometry::yawOf(trueBase(lc.from).linear())});
     }
     coverage = vog::eval::coverageOf(**final_snap, observable_in_map, 2 * grid_config.resolution_m, &covered_flags);
     coverage_unaligned = vog::eval::coverageOf(**final_snap, observable->points.points, 2 * grid_config.resolution_m);
@@ -913,11 +924,22 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         cp << p.x() << ',' << p.y() << ',' << p.z() << ',' << (covered_flags[i] ? 1 : 0) << '\n';
       }
       cl.open(std::filesystem::path(out_dir) / "closures.csv");
-      cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong\n";
+      // directions: the factor's rows over (x, y, yaw), '|' between rows; dx, dy, dyaw: the whole
+      // registration's difference from the truth, asserted or not.
+      cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong,directions,dx_m,dy_m,dyaw_deg,from_true_yaw_"
+            "deg\n";
       for (const ClosureRow& r : closure_rows) {
         cl << r.closure->from << ',' << r.closure->to << ',' << r.closure->factor.rank() << ','
            << r.closure->icp.fitness_m2 << ',' << r.correction_m << ',' << r.error.translation_m << ','
-           << r.error.rotation_rad * 180.0 / std::numbers::pi << ',' << (r.error.wrong ? 1 : 0) << '\n';
+           << r.error.rotation_rad * 180.0 / std::numbers::pi << ',' << (r.error.wrong ? 1 : 0) << ',';
+        const Eigen::MatrixXd& V = r.closure->factor.V_u;
+        for (Eigen::Index k = 0; k < V.rows(); ++k) {
+          cl << (k > 0 ? "|" : "") << std::fixed << std::setprecision(3) << V(k, slam::kX) << ' ' << V(k, slam::kY)
+             << ' ' << V(k, slam::kYaw) << std::defaultfloat << std::setprecision(6);
+        }
+        cl << ',' << r.difference(slam::kX) << ',' << r.difference(slam::kY) << ','
+           << r.difference(slam::kYaw) * 180.0 / std::numbers::pi << ','
+           << r.from_true_yaw_rad * 180.0 / std::numbers::pi << '\n';
       }
     }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
@@ -978,6 +1000,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (evaluate) out.add("closures_wrong", closures_wrong);
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
+  out.add("closure_directions_ambiguous", static_cast<std::int64_t>(lc.ambiguous_directions));
   std::string reasons;
   for (const auto& [reason, n] : lc.rejected_by_reason)
     reasons += (reasons.empty() ? "" : "; ") + reason + ": " + std::to_string(n);

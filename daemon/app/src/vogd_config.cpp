@@ -93,6 +93,9 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("p2p_max_fitness_m2", lc.p2p_max_fitness_m2, 1e-6, 10.0);
   l.number("max_direction_stddev", lc.point_to_plane.max_direction_stddev, 1e-6, 10.0);
   l.number("sigma_point_m", lc.point_to_plane.sigma_point_m, 1e-4, 10.0);
+  l.number("probe_max_shift_m", lc.point_to_plane.probe_max_shift_m, 0.01, 10.0);
+  l.integer("probe_steps", lc.point_to_plane.probe_steps, 0, 100);
+  l.number("min_probe_cost_points", lc.point_to_plane.min_probe_cost_points, 0.0, 1e6);
   double corr = lc.point_to_plane.max_correspondence_distance_m;
   l.number("max_correspondence_distance_m", corr, 0.01, 10.0);
   lc.point_to_plane.max_correspondence_distance_m = corr;
@@ -105,6 +108,9 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);
   l.number("odometry_cov_y_m2_per_s", lc.acceptance.odometry_cov_y_m2_per_s, 1e-9, 10.0);
   l.number("robust_loss_scale", c.graph.loop_closure_loss_scale, 1e-3, 1e3);
+  l.number("consistency_confidence", c.consistency_confidence, 0.0, 0.999999);
+  l.number("consistency_floor_m", c.consistency_floor_m, 0.0, 10.0);
+  l.degrees("consistency_floor_deg", c.consistency_floor_rad, 0.0, 45.0);
   l.finish();
   m.number("depth_stddev_m", c.depth_stddev_m, 1e-4, 10.0);
   m.degrees("roll_pitch_stddev_deg", c.roll_pitch_stddev_rad, 1e-3, 45.0);

@@ -132,6 +132,87 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
   }
 }
 
+// Truncated point-to-plane cost of the source points `kept` at x: min(r^2, c^2) per point, c^2 when
+// no target point lies within c, nothing where the target saw nothing.
+double truncatedCost(const geometry::PointCloud& source, const geometry::PointCloud& target,
+                     const NearestNeighbours& nn, const Vector6d& x, const std::vector<std::size_t>& kept, double c,
+                     const TargetKnown& target_known) {
+  const geometry::Pose3 T = fromXyzRpy(x);
+  const double c2 = c * c;
+  double cost = 0.0;
+  for (const std::size_t i : kept) {
+    const Eigen::Vector3d tp = T * source.points[i];
+    if (target_known && !target_known(tp)) continue;
+    const auto [idx, dist_sq] = nn.nearest(tp);
+    if (dist_sq > c2) {
+      cost += c2;
+      continue;
+    }
+    const double r = target.normals[idx].dot(tp - target.points[idx]);
+    cost += std::min(r * r, c2);
+  }
+  return cost;
+}
+
+// The unique-optimum probe (icp.hpp): drops from out's well-conditioned directions those along which
+// a shift does not move enough correspondences of the result off their surfaces.
+void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source, const geometry::PointCloud& target,
+                             const NearestNeighbours& nn, const Vector6d& x, const PointToPlaneConfig& config,
+                             const TargetKnown& target_known) {
+  if (config.probe_steps == 0 || out.V_u.rows() == 0) return;
+  const double c = config.min_correspondence_distance_m;
+  const geometry::Pose3 T = fromXyzRpy(x);
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < source.points.size(); ++i) {
+    if (nn.nearest(T * source.points[i]).second <= c * c) kept.push_back(i);
+  }
+  if (kept.empty()) return;
+  const double cost0 = truncatedCost(source, target, nn, x, kept, c, target_known);
+  const double min_rise = config.min_probe_cost_points * c * c;
+  const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
+  std::vector<Eigen::Index> unique;
+  for (Eigen::Index row = 0; row < out.V_u.rows(); ++row) {
+    const Vector6d v = out.V_u.row(row).transpose();
+    // RMS displacement of the kept points per unit step along v (first order), to step in metres.
+    double sum_sq = 0.0;
+    for (const std::size_t i : kept) {
+      const Eigen::Vector3d& p = source.points[i];
+      Eigen::Vector3d d = v.head<3>();
+      for (int k = 0; k < 3; ++k) d += v(3 + k) * (dR[static_cast<std::size_t>(k)] * p);
+      sum_sq += d.squaredNorm();
+    }
+    const double rms = std::sqrt(sum_sq / static_cast<double>(kept.size()));
+    bool ok = rms > 0.0;
+    for (int step = 1; ok && step <= config.probe_steps; ++step) {
+      const double s = config.probe_max_shift_m * step / config.probe_steps / rms;
+      for (const double sign : {-1.0, 1.0}) {
+        Vector6d xs = x + sign * s * v;
+        for (int k = kRoll; k <= kYaw; ++k) xs(k) = geometry::wrapAngle(xs(k));
+        if (truncatedCost(source, target, nn, xs, kept, c, target_known) - cost0 < min_rise) {
+          ok = false;
+          break;
+        }
+      }
+    }
+    if (ok) unique.push_back(row);
+  }
+  const auto n = static_cast<Eigen::Index>(unique.size());
+  out.ambiguous_directions = static_cast<int>(out.V_u.rows() - n);
+  if (out.ambiguous_directions == 0) return;
+  Eigen::MatrixXd V_u(n, 6);
+  Eigen::VectorXd eigenvalues_u(n);
+  out.covariance.setZero();
+  const double sigma2 = config.sigma_point_m * config.sigma_point_m;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    V_u.row(k) = out.V_u.row(unique[static_cast<std::size_t>(k)]);
+    eigenvalues_u(k) = out.eigenvalues_u(unique[static_cast<std::size_t>(k)]);
+    const Vector6d v = V_u.row(k).transpose();
+    out.covariance += (sigma2 / eigenvalues_u(k)) * v * v.transpose();
+  }
+  out.V_u = std::move(V_u);
+  out.eigenvalues_u = std::move(eigenvalues_u);
+}
+
 }  // namespace
 
 Status PointToPoint2dConfig::validate() const {
@@ -174,6 +255,12 @@ Status PointToPlaneConfig::validate() const {
     os << "sigma_point_m must be finite and > 0, got " << sigma_point_m;
   else if (!(max_direction_stddev > 0.0) || !std::isfinite(max_direction_stddev))
     os << "max_direction_stddev must be finite and > 0, got " << max_direction_stddev;
+  else if (!(probe_max_shift_m > 0.0) || !std::isfinite(probe_max_shift_m))
+    os << "probe_max_shift_m must be finite and > 0, got " << probe_max_shift_m;
+  else if (probe_steps < 0 || probe_steps > 100)
+    os << "probe_steps must be in [0, 100], got " << probe_steps;
+  else if (!(min_probe_cost_points >= 0.0) || !std::isfinite(min_probe_cost_points))
+    os << "min_probe_cost_points must be finite and >= 0, got " << min_probe_cost_points;
   else if (min_points < 6)
     os << "min_points must be >= 6, got " << min_points;
   else if (min_correspondences < 6)
@@ -286,7 +373,8 @@ Result<IcpResult> icpPointToPoint2d(const geometry::PointCloud& source, const ge
 }
 
 Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
-                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config) {
+                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config,
+                                  const TargetKnown& target_known) {
   if (Status s = config.validate(); !s) return s.error();
   if (Status s = checkCloud(source, "source", config.min_points, false); !s) return s.error();
   if (Status s = checkCloud(target, "target", config.min_points, true); !s) return s.error();
@@ -344,6 +432,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
   fillConditioning(out, lin.AtA, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
+  if (config.degeneracy_aware) dropAmbiguousDirections(out, source, target, nn, x, config, target_known);
   return out;
 }
 

@@ -79,6 +79,7 @@ void LoopCloseStats::add(const LoopCloseStats& other) {
   accepted += other.accepted;
   rejected += other.rejected;
   skipped_heading += other.skipped_heading;
+  ambiguous_directions += other.ambiguous_directions;
   for (const auto& [k, n] : other.rejected_by_reason) rejected_by_reason[k] += n;
 }
 
@@ -152,13 +153,16 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
     } else {
       PointToPlaneConfig c = config_.point_to_plane;
       c.degeneracy_aware = true;
-      icp = icpPointToPlane(source.grid->cloud(), target.grid->cloud(), T_prior, c);
+      const map::LocalGrid& target_grid = *target.grid;
+      icp = icpPointToPlane(source.grid->cloud(), target_grid.cloud(), T_prior, c,
+                            [&target_grid](const Eigen::Vector3d& p) { return target_grid.logOdds(p).has_value(); });
     }
     if (!icp) {
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["registration_failed"];
       continue;
     }
+    out.stats.ambiguous_directions += icp->ambiguous_directions;
     const double dt_s = 1e-9 * static_cast<double>(source.first_stamp_ns - target.first_stamp_ns);
     const IcpAcceptance acc = checkIcpAcceptance(icp.value(), T_prior, dt_s, bounds);
     if (!acc.accepted) {

@@ -3,8 +3,11 @@
 #include "vog/slam/information.hpp"
 #include "vog/slam/pose_vector.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -24,7 +27,99 @@ Status MappingPipelineConfig::validate() const {
     os << "mapping config: roll_pitch_stddev_rad = " << roll_pitch_stddev_rad << " must be > 0";
     return Error{os.str()};
   }
+  if (!(consistency_confidence >= 0.0 && consistency_confidence < 1.0)) {
+    std::ostringstream os;
+    os << "mapping config: consistency_confidence = " << consistency_confidence << " must be in [0, 1)";
+    return Error{os.str()};
+  }
+  if (!(consistency_floor_m >= 0.0) || !std::isfinite(consistency_floor_m) || !(consistency_floor_rad >= 0.0) ||
+      !std::isfinite(consistency_floor_rad)) {
+    std::ostringstream os;
+    os << "mapping config: consistency_floor_m = " << consistency_floor_m
+       << " and consistency_floor_rad = " << consistency_floor_rad << " must be finite and >= 0";
+    return Error{os.str()};
+  }
   return Status::success();
+}
+
+double closureConsistencyChi2(const PartialLoopClosure& closure, const geometry::Pose3& T_world_from,
+                              const geometry::Pose3& T_world_to, double floor_m, double floor_rad) {
+  Vector6d e = toXyzRpy(T_world_from.inverse() * T_world_to) - closure.x_icp;
+  for (int i = kRoll; i <= kYaw; ++i) e(i) = geometry::wrapAngle(e(i));
+  const Eigen::VectorXd r = closure.V_u * e;
+  Vector6d floor_var;
+  floor_var << floor_m * floor_m, floor_m * floor_m, floor_m * floor_m, floor_rad * floor_rad, floor_rad * floor_rad,
+      floor_rad * floor_rad;
+  const Eigen::MatrixXd S = closure.covariance + closure.V_u * floor_var.asDiagonal() * closure.V_u.transpose();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  return r.dot(ldlt.solve(r));
+}
+
+double chiSquareQuantile(int k, double p) {
+  // The chi-square CDF of k degrees of freedom by its series (regularised lower incomplete gamma),
+  // inverted by bisection: exact to 1e-9, enough for a threshold.
+  const auto cdf = [k](double x) {
+    const double a = 0.5 * k, h = 0.5 * x;
+    double term = 1.0 / a, sum = term;
+    for (int n = 1; n < 500 && term > 1e-15 * sum; ++n) {
+      term *= h / (a + n);
+      sum += term;
+    }
+    return std::exp(a * std::log(h) - h - std::lgamma(a)) * sum;
+  };
+  double lo = 0.0, hi = 1000.0;
+  for (int it = 0; it < 200 && hi - lo > 1e-9; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (cdf(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
+                                             const std::vector<LoopClosure>& closures, NodeId newest,
+                                             const MappingPipelineConfig& config) {
+  ConsistentOptimum out{without_closures, std::vector<bool>(closures.size(), false), std::nullopt};
+  const auto left = [&] { return std::find(out.refused.begin(), out.refused.end(), false) != out.refused.end(); };
+  while (left() || config.optimize_every_submap) {
+    out.graph = without_closures;
+    NodeId first_free = newest;
+    for (std::size_t k = 0; k < closures.size(); ++k) {
+      if (out.refused[k]) continue;
+      const LoopClosure& c = closures[k];
+      if (Status s = out.graph.addPartialLoopClosure(c.from, c.to, c.factor); !s.ok()) return s.error();
+      first_free = std::min(first_free, c.from);
+    }
+    auto result = config.optimize_closed_loop_only ? out.graph.optimizeFrom(first_free) : out.graph.optimize();
+    if (!result) return result.error();
+    out.optimize = result.value();
+    if (config.consistency_confidence <= 0.0) break;
+    // The least consistent closure, if any is beyond its quantile.
+    std::optional<std::size_t> worst;
+    double worst_ratio = 1.0;
+    for (std::size_t k = 0; k < closures.size(); ++k) {
+      if (out.refused[k]) continue;
+      const LoopClosure& c = closures[k];
+      auto from = out.graph.pose(c.from);
+      if (!from) return from.error();
+      auto to = out.graph.pose(c.to);
+      if (!to) return to.error();
+      const double chi2 =
+          closureConsistencyChi2(c.factor, *from, *to, config.consistency_floor_m, config.consistency_floor_rad);
+      const double ratio = chi2 / chiSquareQuantile(c.factor.rank(), config.consistency_confidence);
+      if (ratio > worst_ratio) {
+        worst_ratio = ratio;
+        worst = k;
+      }
+    }
+    if (!worst) break;
+    out.refused[*worst] = true;
+    if (!left() && !config.optimize_every_submap) {  // no closure left: nothing moves
+      out.graph = without_closures;
+      out.optimize.reset();
+      break;
+    }
+  }
+  return out;
 }
 
 Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPipelineConfig& config) {
@@ -223,22 +318,29 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     }
     loop_submaps_.pop_back();
     if (!outcome) return Error{"mapping: " + outcome.error().message};
-    for (const LoopClosure& c : outcome->closures) {
-      if (Status s = graph.addPartialLoopClosure(c.from, c.to, c.factor); !s.ok()) {
-        return Error{"mapping: " + s.error().message};
-      }
-    }
     update.closures = std::move(outcome->closures);
     update.loop_stats = outcome->stats;
   }
 
-  if (!update.closures.empty() || config_.optimize_every_submap) {
-    NodeId first_free = id;
-    for (const LoopClosure& c : update.closures) first_free = std::min(first_free, c.from);
-    auto result = config_.optimize_closed_loop_only ? graph.optimizeFrom(first_free) : graph.optimize();
-    if (!result) return Error{"mapping: " + result.error().message};
+  auto optimum = optimizeConsistent(graph, update.closures, id, config_);
+  if (!optimum) return Error{"mapping: " + optimum.error().message};
+  graph = std::move(optimum->graph);
+  if (optimum->optimize) {
     update.optimized = true;
-    update.optimize = result.value();
+    update.optimize = *optimum->optimize;
+  }
+  {
+    std::vector<LoopClosure> kept;
+    for (std::size_t k = 0; k < update.closures.size(); ++k) {
+      if (!optimum->refused[k]) {
+        kept.push_back(std::move(update.closures[k]));
+        continue;
+      }
+      ++update.loop_stats.rejected;
+      --update.loop_stats.accepted;
+      ++update.loop_stats.rejected_by_reason["inconsistent"];
+    }
+    update.closures = std::move(kept);
   }
 
   // Without an optimisation the other estimates did not change: their poses are the ones kept.

@@ -156,6 +156,57 @@ TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry)
   EXPECT_TRUE(closure->covariance.isApprox(expected_cov, 1e-9));
 }
 
+// A long wall with noisy normals: their noise adds information along the wall that grows with the
+// point count, so the eigenvalue rule alone keeps the slide; the unique-optimum probe finds no cost
+// for a shift along the wall (points shifted past its ends land where the target saw nothing) and
+// drops it.
+TEST(DegeneracyAwareIcp, ProbeDropsTheSlideAlongAWallWhoseNoisyNormalsPassTheEigenvalueRule) {
+  const WallPair w = makeClouds({wallX()}, 0.2);
+  Vector6d x_odom = toXyzRpy(kTruth);
+  x_odom(kX) += 0.1;
+  x_odom(kY) += 0.3;
+  PointToPlaneConfig no_probe;
+  no_probe.probe_steps = 0;
+  auto unprobed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), no_probe);
+  ASSERT_TRUE(unprobed.ok()) << unprobed.error().message;
+  ASSERT_EQ(unprobed->V_u.rows(), 3) << "the eigenvalue rule should keep the slide for this test to mean anything";
+  EXPECT_EQ(unprobed->ambiguous_directions, 0);
+
+  const TargetKnown seen = [](const Eigen::Vector3d& p) {  // the wall's slab and the water in front of it
+    return p.x() > 3.0 && p.x() < 5.2 && p.y() > -3.0 && p.y() < 3.0 && p.z() > -3.0 && p.z() < -1.0;
+  };
+  auto probed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), PointToPlaneConfig{}, seen);
+  ASSERT_TRUE(probed.ok()) << probed.error().message;
+  EXPECT_EQ(probed->T_target_source.matrix(), unprobed->T_target_source.matrix());  // the same registration
+  ASSERT_EQ(probed->V_u.rows(), 2);
+  EXPECT_EQ(probed->ambiguous_directions, 1);
+  const Matrix6d P = probed->V_u.transpose() * probed->V_u;
+  EXPECT_LT((P * Vector6d::Unit(kY)).norm(), 0.2) << "the slide along the wall must not be asserted";
+  EXPECT_GT((P * Vector6d::Unit(kX)).norm(), 0.95);
+  // The covariance follows the rows kept.
+  EXPECT_TRUE((probed->V_u * probed->covariance * probed->V_u.transpose())
+                  .isApprox((no_probe.sigma_point_m * no_probe.sigma_point_m) *
+                                probed->eigenvalues_u.cwiseInverse().asDiagonal().toDenseMatrix(),
+                            1e-9));
+}
+
+// The same wall with a small box on it (0.6 x 0.5 m, 0.3 m proud): its sides pin the slide, which the
+// probe keeps.
+TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
+  const Plane front{{4.7, 0.0, -2.5}, {0, 0, 1}, {0, 1, 0}, 0.5, 0.6};   // normal -x, facing the origin
+  const Plane side_a{{4.7, 0.0, -2.5}, {1, 0, 0}, {0, 0, 1}, 0.3, 0.5};  // y = 0, normal -y
+  const Plane side_b{{4.7, 0.6, -2.5}, {0, 0, 1}, {1, 0, 0}, 0.5, 0.3};  // y = 0.6, normal +y
+  const WallPair w = makeClouds({wallX(), front, side_a, side_b}, 0.2);
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.1;
+  x0(kY) += 0.15;
+  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), PointToPlaneConfig{});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->ambiguous_directions, 0);
+  ASSERT_EQ(r->V_u.rows(), 3);
+  EXPECT_NEAR(toXyzRpy(r->T_target_source)(kY), toXyzRpy(kTruth)(kY), 0.03);
+}
+
 // Test (2): a corner; full rank; truth recovered within 2 cm / 0.5 deg from 0.3 m / 3 deg.
 TEST(DegeneracyAwareIcp, CornerIsFullRankAndRecoversTruth) {
   const WallPair w = makeClouds({wallX(), wallY()}, 0.02);

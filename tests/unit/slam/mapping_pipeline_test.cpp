@@ -259,3 +259,68 @@ TEST(MappingPipeline, ConfigValidationNamesTheKey) {
 
 }  // namespace
 }  // namespace vog::slam
+
+namespace vog::slam {
+namespace {
+
+TEST(ClosureConsistency, ChiSquareQuantilesMatchTheTables) {
+  EXPECT_NEAR(chiSquareQuantile(1, 0.999), 10.828, 1e-3);
+  EXPECT_NEAR(chiSquareQuantile(2, 0.95), 5.991, 1e-3);
+  EXPECT_NEAR(chiSquareQuantile(3, 0.999), 16.266, 1e-3);
+  EXPECT_NEAR(chiSquareQuantile(6, 0.99), 16.812, 1e-3);
+}
+
+// Six nodes 1 m apart along x, drifted in y by odometry; three closures to the newest agree with the
+// truth, a fourth is 0.6 m off across the line. With the check, the fourth is refused and the others
+// enter; without it, all four enter and pull the newest node off.
+TEST(ClosureConsistency, AClosureThatDisagreesWithTheOthersIsRefusedBeforeInsertion) {
+  auto created = PoseGraph::create();
+  ASSERT_TRUE(created.ok());
+  PoseGraph graph = std::move(created.value());
+  const auto truth = [](int k) { return geometry::poseFromXyzRpy(1.0 * k, 0.0, -2.0, 0.0, 0.0, 0.0); };
+  const Eigen::Matrix3d odometry_information = Eigen::Vector3d(1.0 / 0.01, 1.0 / 0.01, 1.0 / 1e-4).asDiagonal();
+  const Eigen::Matrix3d absolute_information = Eigen::Vector3d(400.0, 1e4, 1e4).asDiagonal();
+  for (int k = 0; k <= 5; ++k) {
+    ASSERT_TRUE(graph.addNode(k, geometry::poseFromXyzRpy(1.0 * k, 0.08 * k, -2.0, 0.0, 0.0, 0.0)).ok());
+    ASSERT_TRUE(graph.addAbsoluteFactor(k, Eigen::Vector3d(-2.0, 0.0, 0.0), absolute_information).ok());
+    if (k > 0) {
+      ASSERT_TRUE(graph.addOdometryFactor(k - 1, k, Eigen::Vector3d(1.0, 0.08, 0.0), odometry_information).ok());
+    }
+  }
+  Eigen::MatrixXd V_u = Eigen::MatrixXd::Zero(3, 6);
+  V_u(0, kX) = V_u(1, kY) = V_u(2, kYaw) = 1.0;
+  const Matrix6d covariance = (Vector6d() << 1e-4, 1e-4, 0, 0, 0, 1e-6).finished().asDiagonal();
+  std::vector<LoopClosure> closures;
+  for (const int from : {0, 1, 2, 3}) {
+    Vector6d x = toXyzRpy(truth(from).inverse() * truth(5));
+    if (from == 3) x(kY) += 0.6;
+    LoopClosure c;
+    c.from = from;
+    c.to = 5;
+    auto factor = makePartialLoopClosure(V_u, x, covariance);
+    ASSERT_TRUE(factor.ok()) << factor.error().message;
+    c.factor = factor.value();
+    closures.push_back(c);
+  }
+  MappingPipelineConfig config;
+  auto checked = optimizeConsistent(graph, closures, 5, config);
+  ASSERT_TRUE(checked.ok()) << checked.error().message;
+  EXPECT_EQ(checked->refused, (std::vector<bool>{false, false, false, true}));
+  ASSERT_TRUE(checked->optimize.has_value());
+  EXPECT_LT(geometry::translationDistance(checked->graph.pose(5).value(), truth(5)), 0.05);
+
+  config.consistency_confidence = 0.0;
+  auto unchecked = optimizeConsistent(graph, closures, 5, config);
+  ASSERT_TRUE(unchecked.ok()) << unchecked.error().message;
+  EXPECT_EQ(unchecked->refused, (std::vector<bool>(4, false)));
+
+  // Only the wrong closure: it disagrees with odometry alone and is refused; nothing is optimised.
+  config.consistency_confidence = 0.999;
+  auto alone = optimizeConsistent(graph, {closures[3]}, 5, config);
+  ASSERT_TRUE(alone.ok()) << alone.error().message;
+  EXPECT_EQ(alone->refused, (std::vector<bool>{true}));
+  EXPECT_FALSE(alone->optimize.has_value());
+}
+
+}  // namespace
+}  // namespace vog::slam

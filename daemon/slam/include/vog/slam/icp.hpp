@@ -20,6 +20,18 @@
 // translations and radians for rotations (1 rad ~ 1 m lever arm, the size of a submap's features).
 // Note that the rule trusts the normals: noisy normals add spurious information along a wall, which
 // grows with the point count, so sigma_point_m should not be set below the real residual noise.
+//
+// Unique optimum (the eigenvalue alone cannot tell): on a long flat wall with a few small features the
+// normals' noise and the ends of the overlap make the slide along the wall look well-conditioned while
+// a second optimum lies along it (a feature seen by one submap only, or none). So each direction the
+// rule keeps is probed: the result is shifted along it by a few steps up to probe_max_shift_m (the RMS
+// displacement of the source points) both ways, and the truncated point-to-plane cost of the
+// correspondences of the result (residuals capped at the final bound c, a lost correspondence costs
+// c^2) must rise by at least min_probe_cost_points * c^2 at every shift, i.e. every shift must move
+// that many correspondences off their surfaces. A direction that fails is dropped from V_u as
+// degenerate. Points that gain a correspondence when shifted do not count, so a larger overlap never
+// passes for a constraint, nor do points shifted to where the target saw nothing (TargetKnown): on a
+// plain wall the shift along it moves no correspondence off, and the direction fails.
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
@@ -29,6 +41,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 namespace vog::slam {
@@ -53,6 +66,8 @@ struct IcpResult {
   Eigen::VectorXd eigenvalues_u;
   // All eigenvalues of A^T A over the estimated components, ascending.
   Eigen::VectorXd eigenvalues;
+  // Directions the eigenvalue rule kept and the unique-optimum probe dropped (point-to-plane).
+  int ambiguous_directions = 0;
 };
 
 struct PointToPoint2dConfig {
@@ -102,6 +117,14 @@ struct PointToPlaneConfig {
   // of a propeller holds a few hundred cloud points, with which no translation reaches 1 cm
   // (vog-bench slam).
   double max_direction_stddev = 0.03;
+  // Unique-optimum probe above (degeneracy_aware only): shifts of probe_max_shift_m / probe_steps,
+  // 2 probe_max_shift_m / probe_steps, ... up to probe_max_shift_m on both sides (1 m: the capture
+  // range, so the shortest shift is beyond the final bound); 0 steps turns the probe off.
+  double probe_max_shift_m = 1.0;
+  int probe_steps = 3;
+  // 8 correspondences: with sigma_point_m 0.1 and a 0.3 m bound, 72 sigma^2 of cost, where the
+  // voxel-sized residuals of a few thousand wall points vary by about 10 sigma^2 between shifts.
+  double min_probe_cost_points = 8.0;
   // false: plain point-to-plane ICP, stepping along every direction that is not numerically
   // singular (the thesis's lambda_min = 0, Fig. 4.13c).
   bool degeneracy_aware = true;
@@ -112,9 +135,15 @@ struct PointToPlaneConfig {
   Status validate() const;
 };
 
+// Whether the target observed a point of its frame (its grid holds the voxel, free or occupied). The
+// probe counts only shifted points that land where the target saw something: past the end of what
+// the target saw, a shift tells nothing. Empty: the target saw everything.
+using TargetKnown = std::function<bool(const Eigen::Vector3d&)>;
+
 // The target cloud must carry normals (unit, finite).
 Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
-                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config);
+                                  const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config,
+                                  const TargetKnown& target_known = {});
 
 // Thesis Alg. 6 acceptance criteria for a registration.
 struct IcpAcceptanceConfig {

@@ -97,6 +97,7 @@ struct LoopCloseStats {
   int rejected = 0;
   std::map<std::string, int> rejected_by_reason;  // cause -> count
   int skipped_heading = 0;                        // candidates skipped by the viewing-direction gate (not tried)
+  int ambiguous_directions = 0;                   // directions of tried registrations the probe dropped
   void add(const LoopCloseStats& other);
 };
 

@@ -51,8 +51,41 @@ struct MappingPipelineConfig {
   // from later closures (harbour survey, 250 submaps: submap pose RMSE 0.48 m against 0.34 m with the
   // whole graph; daemon/slam/README.md). Without a closure only the new node is optimised.
   bool optimize_closed_loop_only = false;
+  // Consistency before insertion: the new submap's accepted closures enter the graph only when they
+  // agree with odometry and the other closures. The graph is optimised with them; a closure whose
+  // residual at that optimum is unlikely (closureConsistencyChi2 above the chi-square quantile of
+  // its rank at consistency_confidence) is refused, the worst first, and the rest optimised again.
+  // The residual's covariance is the closure's own plus a floor for what the registration's
+  // covariance leaves out (voxel-sized bias of partial views): consistency_floor_m along its
+  // translations, consistency_floor_rad along its rotations. 0 confidence: every closure enters.
+  double consistency_confidence = 0.999;
+  double consistency_floor_m = 0.05;
+  double consistency_floor_rad = geometry::deg2rad(0.5);
   Status validate() const;
 };
+
+// The consistency statistic of a closure at the estimates T_world_from, T_world_to: r^T S^-1 r with r
+// the closure's residual in its directions (as the pose graph's factor has it) and S its covariance
+// plus V_u diag(floor_m^2 I3, floor_rad^2 I3) V_u^T.
+double closureConsistencyChi2(const PartialLoopClosure& closure, const geometry::Pose3& T_world_from,
+                              const geometry::Pose3& T_world_to, double floor_m, double floor_rad);
+
+// The chi-square quantile of k degrees of freedom (1..6) at confidence p in (0, 1).
+double chiSquareQuantile(int k, double p);
+
+// The consistency check before insertion (MappingPipelineConfig::consistency_confidence): optimises
+// `without_closures` (the graph with the new node `newest`, its odometry and absolute factors) with
+// `closures`, refusing the least consistent one and optimising again while one is beyond its quantile.
+// `optimize` is empty when nothing was optimised (no closure left and optimize_every_submap off): the
+// graph is then `without_closures`.
+struct ConsistentOptimum {
+  PoseGraph graph;
+  std::vector<bool> refused;  // per closure
+  std::optional<OptimizeResult> optimize;
+};
+Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
+                                             const std::vector<LoopClosure>& closures, NodeId newest,
+                                             const MappingPipelineConfig& config);
 
 // What one feed()/finish() changed.
 struct MappingUpdate {
