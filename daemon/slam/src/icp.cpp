@@ -132,63 +132,90 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
   }
 }
 
-// Truncated point-to-plane cost of the source points `kept` at x: min(r^2, c^2) per point, c^2 when
-// no target point lies within c, nothing where the target saw nothing.
-double truncatedCost(const geometry::PointCloud& source, const geometry::PointCloud& target,
-                     const NearestNeighbours& nn, const Vector6d& x, const std::vector<std::size_t>& kept, double c,
-                     const TargetKnown& target_known) {
-  const geometry::Pose3 T = fromXyzRpy(x);
-  const double c2 = c * c;
-  double cost = 0.0;
-  for (const std::size_t i : kept) {
-    const Eigen::Vector3d tp = T * source.points[i];
-    if (target_known && !target_known(tp)) continue;
-    const auto [idx, dist_sq] = nn.nearest(tp);
-    if (dist_sq > c2) {
-      cost += c2;
-      continue;
-    }
-    const double r = target.normals[idx].dot(tp - target.points[idx]);
-    cost += std::min(r * r, c2);
-  }
-  return cost;
+// Truncated point-to-plane cost of a source point at T: min(r^2, c^2), c^2 when no target point lies
+// within c.
+double truncatedCost(const geometry::PointCloud& target, const NearestNeighbours& nn, const Eigen::Vector3d& tp,
+                     double c) {
+  const auto [idx, dist_sq] = nn.nearest(tp);
+  if (dist_sq > c * c) return c * c;
+  const double r = target.normals[idx].dot(tp - target.points[idx]);
+  return std::min(r * r, c * c);
 }
 
 // The unique-optimum probe (icp.hpp): drops from out's well-conditioned directions those along which
 // a shift does not move enough correspondences of the result off their surfaces.
 void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source, const geometry::PointCloud& target,
-                             const NearestNeighbours& nn, const Vector6d& x, const PointToPlaneConfig& config,
-                             const TargetKnown& target_known) {
+                             const NearestNeighbours& nn, const Vector6d& x, const std::vector<int>& comps,
+                             const PointToPlaneConfig& config, const TargetKnown& target_known) {
   if (config.probe_steps == 0 || out.V_u.rows() == 0) return;
   const double c = config.min_correspondence_distance_m;
   const geometry::Pose3 T = fromXyzRpy(x);
   std::vector<std::size_t> kept;
+  std::vector<Eigen::Vector3d> kept_normals;  // of their target points at the result
+  std::vector<double> kept_costs;             // at the result
   for (std::size_t i = 0; i < source.points.size(); ++i) {
-    if (nn.nearest(T * source.points[i]).second <= c * c) kept.push_back(i);
+    const Eigen::Vector3d tp = T * source.points[i];
+    const auto [idx, dist_sq] = nn.nearest(tp);
+    if (dist_sq > c * c) continue;
+    kept.push_back(i);
+    kept_normals.push_back(target.normals[idx]);
+    kept_costs.push_back(truncatedCost(target, nn, tp, c));
   }
   if (kept.empty()) return;
-  const double cost0 = truncatedCost(source, target, nn, x, kept, c, target_known);
+  // The cost a shift adds over the kept points, leaving out those that slide along their surface to
+  // where the target saw nothing: past the end of what the target saw, a shift tells nothing.
+  const auto rise = [&](const Vector6d& xs, const std::vector<bool>& sliding) {
+    const geometry::Pose3 Ts = fromXyzRpy(xs);
+    double sum = 0.0;
+    for (std::size_t j = 0; j < kept.size(); ++j) {
+      const Eigen::Vector3d tp = Ts * source.points[kept[j]];
+      if (sliding[j] && target_known && !target_known(tp)) continue;
+      sum += truncatedCost(target, nn, tp, c) - kept_costs[j];
+    }
+    return sum;
+  };
   const double min_rise = config.min_probe_cost_points * c * c;
   const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
   std::vector<Eigen::Index> unique;
   for (Eigen::Index row = 0; row < out.V_u.rows(); ++row) {
     const Vector6d v = out.V_u.row(row).transpose();
-    // RMS displacement of the kept points per unit step along v (first order), to step in metres.
+    // RMS displacement of the kept points per unit step along v (first order), to step in metres; a
+    // point slides when it moves more along its surface than across it.
     double sum_sq = 0.0;
-    for (const std::size_t i : kept) {
-      const Eigen::Vector3d& p = source.points[i];
+    std::vector<bool> sliding(kept.size());
+    for (std::size_t j = 0; j < kept.size(); ++j) {
+      const Eigen::Vector3d& p = source.points[kept[j]];
       Eigen::Vector3d d = v.head<3>();
       for (int k = 0; k < 3; ++k) d += v(3 + k) * (dR[static_cast<std::size_t>(k)] * p);
       sum_sq += d.squaredNorm();
+      sliding[j] = std::abs(kept_normals[j].dot(d)) < std::sqrt(0.5) * d.norm();
     }
     const double rms = std::sqrt(sum_sq / static_cast<double>(kept.size()));
+    // The other kept directions, over the estimated components: after each shift the registration
+    // settles along them (a few Gauss-Newton steps), so that what is measured is the cost of the
+    // shift itself and not of the tilt an eigenvector mixes in.
+    Eigen::MatrixXd others(out.V_u.rows() - 1, static_cast<Eigen::Index>(comps.size()));
+    for (Eigen::Index o = 0, r = 0; o < out.V_u.rows(); ++o) {
+      if (o == row) continue;
+      for (std::size_t k = 0; k < comps.size(); ++k) others(r, static_cast<Eigen::Index>(k)) = out.V_u(o, comps[k]);
+      ++r;
+    }
     bool ok = rms > 0.0;
     for (int step = 1; ok && step <= config.probe_steps; ++step) {
       const double s = config.probe_max_shift_m * step / config.probe_steps / rms;
       for (const double sign : {-1.0, 1.0}) {
         Vector6d xs = x + sign * s * v;
+        for (int settle = 0; settle < 3 && others.rows() > 0; ++settle) {
+          const Linearisation lin = linearisePointToPlane(source, target, nn, xs, comps, c);
+          if (lin.n < 6) break;
+          const Eigen::MatrixXd H = others * lin.AtA * others.transpose();
+          const Eigen::VectorXd g = others * lin.Atb;
+          const Eigen::VectorXd step_o = others.transpose() * H.ldlt().solve(g);
+          if (!step_o.allFinite()) break;
+          for (std::size_t k = 0; k < comps.size(); ++k) xs(comps[k]) += step_o(static_cast<Eigen::Index>(k));
+        }
         for (int k = kRoll; k <= kYaw; ++k) xs(k) = geometry::wrapAngle(xs(k));
-        if (truncatedCost(source, target, nn, xs, kept, c, target_known) - cost0 < min_rise) {
+        if (rise(xs, sliding) < min_rise) {
           ok = false;
           break;
         }
@@ -432,7 +459,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
   fillConditioning(out, lin.AtA, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
-  if (config.degeneracy_aware) dropAmbiguousDirections(out, source, target, nn, x, config, target_known);
+  if (config.degeneracy_aware) dropAmbiguousDirections(out, source, target, nn, x, comps, config, target_known);
   return out;
 }
 

@@ -22,16 +22,18 @@
 // grows with the point count, so sigma_point_m should not be set below the real residual noise.
 //
 // Unique optimum (the eigenvalue alone cannot tell): on a long flat wall with a few small features the
-// normals' noise and the ends of the overlap make the slide along the wall look well-conditioned while
-// a second optimum lies along it (a feature seen by one submap only, or none). So each direction the
-// rule keeps is probed: the result is shifted along it by a few steps up to probe_max_shift_m (the RMS
-// displacement of the source points) both ways, and the truncated point-to-plane cost of the
-// correspondences of the result (residuals capped at the final bound c, a lost correspondence costs
-// c^2) must rise by at least min_probe_cost_points * c^2 at every shift, i.e. every shift must move
-// that many correspondences off their surfaces. A direction that fails is dropped from V_u as
-// degenerate. Points that gain a correspondence when shifted do not count, so a larger overlap never
-// passes for a constraint, nor do points shifted to where the target saw nothing (TargetKnown): on a
-// plain wall the shift along it moves no correspondence off, and the direction fails.
+// normals' noise makes the slide along the wall look well-conditioned while a second optimum lies
+// along it (a feature seen by one submap only, or none). So each direction the rule keeps is probed:
+// the result is shifted along it by probe_steps steps up to probe_max_shift_m (the RMS displacement
+// of the source points) both ways, the other kept directions settle (three Gauss-Newton steps within
+// the final bound c), and the truncated point-to-plane cost of the result's correspondences
+// (residuals capped at c, a lost correspondence costs c^2) must rise by at least
+// min_probe_cost_points * c^2 at every shift: every shift must move that many correspondences off
+// their surfaces. A direction that fails is dropped from V_u as degenerate. Points that gain a
+// correspondence when shifted do not count, so a larger overlap never passes for a constraint, nor
+// do points that slide along their surface (more along it than across) to where the target saw
+// nothing (TargetKnown): past the end of what the target saw a shift tells nothing, while a point
+// pushed through its surface counts. On a plain wall the shift along it then costs nothing.
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
@@ -136,8 +138,8 @@ struct PointToPlaneConfig {
 };
 
 // Whether the target observed a point of its frame (its grid holds the voxel, free or occupied). The
-// probe counts only shifted points that land where the target saw something: past the end of what
-// the target saw, a shift tells nothing. Empty: the target saw everything.
+// probe does not count points that slide along their surface to where the target saw nothing: past
+// the end of what the target saw, a shift tells nothing. Empty: the target saw everything.
 using TargetKnown = std::function<bool(const Eigen::Vector3d&)>;
 
 // The target cloud must carry normals (unit, finite).
