@@ -55,7 +55,8 @@ TEST(Scene, ParsesTheIssueSchema) {
 }
 
 TEST(Scene, ShippedScenesLoadAndBuildWithAStartClearOfObstacles) {
-  for (const char* name : {"pilings.yaml", "propeller.yaml", "tank.yaml", "harbour.yaml", "hull.yaml", "slanted-pier.yaml"}) {
+  for (const char* name :
+       {"pilings.yaml", "propeller.yaml", "tank.yaml", "harbour.yaml", "hull.yaml", "slanted-pier.yaml"}) {
     auto s = loadScene(scenesDir() / name);
     ASSERT_TRUE(s.ok()) << name << ": " << s.error().message;
     auto w = World::create(*s);
