@@ -171,6 +171,10 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
       "--lc-max-yaw-disagreement-deg",
       [&](double deg) { base.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },
       "loop closures: largest yaw difference between a registration and its prior, deg");
+  app.add_option("--lc-probe-steps", base.loop_closer.point_to_plane.probe_steps,
+                 "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default)");
+  app.add_option("--lc-consistency", base.consistency_confidence,
+                 "loop closures: confidence of the consistency check before insertion (0: off, the default)");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {

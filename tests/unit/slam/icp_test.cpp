@@ -175,7 +175,9 @@ TEST(DegeneracyAwareIcp, ProbeDropsTheSlideAlongAWallWhoseNoisyNormalsPassTheEig
   const TargetKnown seen = [](const Eigen::Vector3d& p) {  // the wall's slab and the water in front of it
     return p.x() > 3.0 && p.x() < 5.2 && p.y() > -3.0 && p.y() < 3.0 && p.z() > -3.0 && p.z() < -1.0;
   };
-  auto probed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), PointToPlaneConfig{}, seen);
+  PointToPlaneConfig with_probe;
+  with_probe.probe_steps = 3;
+  auto probed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), with_probe, seen);
   ASSERT_TRUE(probed.ok()) << probed.error().message;
   EXPECT_EQ(probed->T_target_source.matrix(), unprobed->T_target_source.matrix());  // the same registration
   ASSERT_EQ(probed->V_u.rows(), 2);
@@ -200,7 +202,9 @@ TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
   Vector6d x0 = toXyzRpy(kTruth);
   x0(kX) += 0.1;
   x0(kY) += 0.15;
-  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), PointToPlaneConfig{});
+  PointToPlaneConfig with_probe;
+  with_probe.probe_steps = 3;
+  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), with_probe);
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->ambiguous_directions, 0);
   ASSERT_EQ(r->V_u.rows(), 3);

@@ -303,6 +303,7 @@ TEST(ClosureConsistency, AClosureThatDisagreesWithTheOthersIsRefusedBeforeInsert
     closures.push_back(c);
   }
   MappingPipelineConfig config;
+  config.consistency_confidence = 0.999;
   auto checked = optimizeConsistent(graph, closures, 5, config);
   ASSERT_TRUE(checked.ok()) << checked.error().message;
   EXPECT_EQ(checked->refused, (std::vector<bool>{false, false, false, true}));

@@ -57,8 +57,9 @@ struct MappingPipelineConfig {
   // its rank at consistency_confidence) is refused, the worst first, and the rest optimised again.
   // The residual's covariance is the closure's own plus a floor for what the registration's
   // covariance leaves out (voxel-sized bias of partial views): consistency_floor_m along its
-  // translations, consistency_floor_rad along its rotations. 0 confidence: every closure enters.
-  double consistency_confidence = 0.999;
+  // translations, consistency_floor_rad along its rotations. 0 confidence: every closure enters, the
+  // default until the check makes the trajectory better (daemon/slam/README.md; 0.999 measured there).
+  double consistency_confidence = 0.0;
   double consistency_floor_m = 0.05;
   double consistency_floor_rad = geometry::deg2rad(0.5);
   Status validate() const;
