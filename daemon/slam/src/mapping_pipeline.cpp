@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -80,6 +81,11 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
                                              const MappingPipelineConfig& config) {
   ConsistentOptimum out{without_closures, std::vector<bool>(closures.size(), false), std::nullopt};
   const auto left = [&] { return std::find(out.refused.begin(), out.refused.end(), false) != out.refused.end(); };
+  std::array<double, 7> quantile{};  // by rank 1..6, computed once per call
+  if (config.consistency_confidence > 0.0) {
+    for (int k = 1; k <= 6; ++k)
+      quantile[static_cast<std::size_t>(k)] = chiSquareQuantile(k, config.consistency_confidence);
+  }
   while (left() || config.optimize_every_submap) {
     out.graph = without_closures;
     NodeId first_free = newest;
@@ -105,7 +111,7 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
       if (!to) return to.error();
       const double chi2 =
           closureConsistencyChi2(c.factor, *from, *to, config.consistency_floor_m, config.consistency_floor_rad);
-      const double ratio = chi2 / chiSquareQuantile(c.factor.rank(), config.consistency_confidence);
+      const double ratio = chi2 / quantile[static_cast<std::size_t>(c.factor.rank())];
       if (ratio > worst_ratio) {
         worst_ratio = ratio;
         worst = k;

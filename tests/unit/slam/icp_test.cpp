@@ -156,6 +156,13 @@ TEST(DegeneracyAwareIcp, FlatWallCorrectsNormalAndYawKeepsAlongWallFromOdometry)
   EXPECT_TRUE(closure->covariance.isApprox(expected_cov, 1e-9));
 }
 
+// The unique-optimum probe as measured in daemon/slam/README.md (off by default).
+PointToPlaneConfig withProbe() {
+  PointToPlaneConfig c;
+  c.probe_steps = 3;
+  return c;
+}
+
 // A long wall with noisy normals: their noise adds information along the wall that grows with the
 // point count, so the eigenvalue rule alone keeps the slide; the unique-optimum probe finds no cost
 // for a shift along the wall (points shifted past its ends land where the target saw nothing) and
@@ -175,9 +182,7 @@ TEST(DegeneracyAwareIcp, ProbeDropsTheSlideAlongAWallWhoseNoisyNormalsPassTheEig
   const TargetKnown seen = [](const Eigen::Vector3d& p) {  // the wall's slab and the water in front of it
     return p.x() > 3.0 && p.x() < 5.2 && p.y() > -3.0 && p.y() < 3.0 && p.z() > -3.0 && p.z() < -1.0;
   };
-  PointToPlaneConfig with_probe;
-  with_probe.probe_steps = 3;
-  auto probed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), with_probe, seen);
+  auto probed = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), withProbe(), seen);
   ASSERT_TRUE(probed.ok()) << probed.error().message;
   EXPECT_EQ(probed->T_target_source.matrix(), unprobed->T_target_source.matrix());  // the same registration
   ASSERT_EQ(probed->V_u.rows(), 2);
@@ -202,9 +207,7 @@ TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
   Vector6d x0 = toXyzRpy(kTruth);
   x0(kX) += 0.1;
   x0(kY) += 0.15;
-  PointToPlaneConfig with_probe;
-  with_probe.probe_steps = 3;
-  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), with_probe);
+  auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), withProbe());
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->ambiguous_directions, 0);
   ASSERT_EQ(r->V_u.rows(), 3);
