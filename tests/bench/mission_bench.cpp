@@ -310,6 +310,15 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                  "mapping: the pose graph solver's relative cost change that ends it");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
+  app.add_option("--lc-max-registrations", mc.loop_closer.max_registrations,
+                 "loop closures: at most this many registrations per new submap, the nearest candidates (0: all)")
+      ->check(CLI::Range(0, 100'000));
+  app.add_option("--local-optimization-nodes", mc.local_optimization_nodes,
+                 "mapping: in a graph of more nodes, a solve frees only this many around the new submap (0: never)")
+      ->check(CLI::Range(0, 1'000'000));
+  app.add_option("--full-optimization-every", mc.full_optimization_every,
+                 "mapping: with --local-optimization-nodes, solve the whole graph every this-many-th submap")
+      ->check(CLI::Range(1, 1'000'000));
   app.add_flag("--same-run-global-tree", same_run_global_tree,
                "vog / vog-lc: also score the run's scans fused into one global tree at raw odometry");
   app.add_option("--path", path_name,
@@ -1001,6 +1010,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (evaluate) out.add("closures_wrong", closures_wrong);
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
+  out.add("closures_skipped_budget", static_cast<std::int64_t>(lc.skipped_budget));
   out.add("closure_directions_ambiguous", static_cast<std::int64_t>(lc.ambiguous_directions));
   std::string reasons;
   for (const auto& [reason, n] : lc.rejected_by_reason)

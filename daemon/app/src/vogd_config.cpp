@@ -103,6 +103,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("min_correspondence_distance_m", lc.point_to_plane.min_correspondence_distance_m, 0.01, 10.0);
   l.degrees("max_heading_difference_deg", lc.max_heading_difference_rad, 1.0, 180.0);
   l.degrees("max_yaw_disagreement_deg", lc.max_yaw_disagreement_rad, 0.1, 180.0);
+  l.integer("max_registrations", lc.max_registrations, 0, 100'000);
   l.number("min_overlap_fraction", lc.min_overlap_fraction, 0.0, 1.0);
   l.number("p2p_min_overlap_fraction", lc.p2p_min_overlap_fraction, 0.0, 1.0);
   l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);
@@ -116,6 +117,8 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.degrees("roll_pitch_stddev_deg", c.roll_pitch_stddev_rad, 1e-3, 45.0);
   m.boolean("optimize_every_submap", c.optimize_every_submap);
   m.boolean("optimize_closed_loop_only", c.optimize_closed_loop_only);
+  m.integer("local_optimization_nodes", c.local_optimization_nodes, 0, 1'000'000);
+  m.integer("full_optimization_every", c.full_optimization_every, 1, 1'000'000);
   m.finish();
 }
 

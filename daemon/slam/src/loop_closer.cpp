@@ -63,6 +63,10 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: max_yaw_disagreement_rad = " + std::to_string(max_yaw_disagreement_rad) +
                  " must be in (0, pi]"};
   }
+  if (max_registrations < 0) {
+    return Error{"loop closer config: max_registrations = " + std::to_string(max_registrations) +
+                 " must be >= 0 (0: no limit)"};
+  }
   if (!(min_overlap_fraction >= 0.0 && min_overlap_fraction <= 1.0)) {
     return Error{"loop closer config: min_overlap_fraction = " + std::to_string(min_overlap_fraction) +
                  " must be in [0, 1]"};
@@ -79,6 +83,7 @@ void LoopCloseStats::add(const LoopCloseStats& other) {
   accepted += other.accepted;
   rejected += other.rejected;
   skipped_heading += other.skipped_heading;
+  skipped_budget += other.skipped_budget;
   ambiguous_directions += other.ambiguous_directions;
   for (const auto& [k, n] : other.rejected_by_reason) rejected_by_reason[k] += n;
 }
@@ -136,14 +141,32 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
 
   LoopCloseOutcome out;
   const LoopSubmap& source = submaps[newest];
+  std::vector<std::size_t> gated;
   for (const std::size_t k : partners.value()) {
-    const LoopSubmap& target = submaps[k];
     const double dyaw = geometry::wrapAngle(geometry::yawOf(source.T_world_submap.linear()) -
-                                            geometry::yawOf(target.T_world_submap.linear()));
+                                            geometry::yawOf(submaps[k].T_world_submap.linear()));
     if (std::abs(dyaw) > config_.max_heading_difference_rad) {
       ++out.stats.skipped_heading;
       continue;
     }
+    gated.push_back(k);
+  }
+  const auto budget = static_cast<std::size_t>(config_.max_registrations);
+  if (budget > 0 && gated.size() > budget) {
+    // The nearest by the clouds' centroids at the current estimates, ties by position (deterministic).
+    const auto centroid = [&](std::size_t k) { return footprints[k].T_world_submap * footprints[k].centroid_submap; };
+    const Eigen::Vector3d c = centroid(newest);
+    std::vector<std::pair<double, std::size_t>> by_distance;
+    for (const std::size_t k : gated) by_distance.emplace_back((centroid(k) - c).squaredNorm(), k);
+    std::sort(by_distance.begin(), by_distance.end());
+    by_distance.resize(budget);
+    out.stats.skipped_budget = static_cast<int>(gated.size() - by_distance.size());
+    gated.clear();
+    for (const auto& [d2, k] : by_distance) gated.push_back(k);
+    std::sort(gated.begin(), gated.end());
+  }
+  for (const std::size_t k : gated) {
+    const LoopSubmap& target = submaps[k];
     ++out.stats.tried;
     // T_target_source predicted by the current estimates (the odometry chain plus earlier closures).
     const geometry::Pose3 T_prior = target.T_world_submap.inverse() * source.T_world_submap;

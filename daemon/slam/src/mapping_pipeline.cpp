@@ -40,6 +40,12 @@ Status MappingPipelineConfig::validate() const {
        << " and consistency_floor_rad = " << consistency_floor_rad << " must be finite and >= 0";
     return Error{os.str()};
   }
+  if (local_optimization_nodes < 0 || full_optimization_every < 1) {
+    std::ostringstream os;
+    os << "mapping config: local_optimization_nodes = " << local_optimization_nodes
+       << " must be >= 0 and full_optimization_every = " << full_optimization_every << " >= 1";
+    return Error{os.str()};
+  }
   return Status::success();
 }
 
@@ -86,16 +92,31 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
     for (int k = 1; k <= 6; ++k)
       quantile[static_cast<std::size_t>(k)] = chiSquareQuantile(k, config.consistency_confidence);
   }
-  while (left() || config.optimize_every_submap) {
+  const bool bounded = !config.optimize_closed_loop_only && config.local_optimization_nodes > 0 &&
+                       without_closures.numNodes() > static_cast<std::size_t>(config.local_optimization_nodes);
+  const bool full_due = bounded && newest % static_cast<NodeId>(config.full_optimization_every) == 0;
+  const bool forced = config.optimize_every_submap || full_due;
+  while (left() || forced) {
     out.graph = without_closures;
     NodeId first_free = newest;
+    std::vector<NodeId> seeds{newest};
     for (std::size_t k = 0; k < closures.size(); ++k) {
       if (out.refused[k]) continue;
       const LoopClosure& c = closures[k];
       if (Status s = out.graph.addPartialLoopClosure(c.from, c.to, c.factor); !s.ok()) return s.error();
       first_free = std::min(first_free, c.from);
+      seeds.push_back(c.from);
+      seeds.push_back(c.to);
     }
-    auto result = config.optimize_closed_loop_only ? out.graph.optimizeFrom(first_free) : out.graph.optimize();
+    Result<OptimizeResult> result = Error{""};
+    if (config.optimize_closed_loop_only) {
+      result = out.graph.optimizeFrom(first_free);
+    } else if (bounded && !full_due) {
+      result = out.graph.optimizeNodes(
+          out.graph.neighbourhood(seeds, static_cast<std::size_t>(config.local_optimization_nodes)));
+    } else {
+      result = out.graph.optimize();
+    }
     if (!result) return result.error();
     out.optimize = result.value();
     if (config.consistency_confidence <= 0.0) break;
@@ -119,7 +140,7 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
     }
     if (!worst) break;
     out.refused[*worst] = true;
-    if (!left() && !config.optimize_every_submap) {  // no closure left: nothing moves
+    if (!left() && !forced) {  // no closure left: nothing moves
       out.graph = without_closures;
       out.optimize.reset();
       break;

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <sstream>
@@ -605,23 +606,58 @@ Status PoseGraph::initializeChordal() {
 
 Result<OptimizeResult> PoseGraph::optimize() {
   if (nodes_.empty()) return Error{"pose graph: nothing to optimize (no nodes)"};
-  return solve(nodes_.begin()->first);
+  return solve([](NodeId) { return true; }, nodes_.begin()->first, nodes_.size());
 }
 
 Result<OptimizeResult> PoseGraph::optimizeFrom(NodeId first_free) {
   if (nodes_.empty()) return Error{"pose graph: nothing to optimize (no nodes)"};
-  if (nodes_.lower_bound(first_free) == nodes_.end()) {
+  const auto first = nodes_.lower_bound(first_free);
+  if (first == nodes_.end()) {
     return Error{"pose graph: no node to optimize from " + std::to_string(first_free) + " on (the last is " +
                  std::to_string(nodes_.rbegin()->first) + ")"};
   }
-  return solve(first_free);
+  return solve([first_free](NodeId id) { return id >= first_free; }, first->first,
+               static_cast<std::size_t>(std::distance(first, nodes_.end())));
 }
 
-Result<OptimizeResult> PoseGraph::solve(NodeId first_free) {
+Result<OptimizeResult> PoseGraph::optimizeNodes(const std::set<NodeId>& free) {
+  if (free.empty()) return Error{"pose graph: no node to optimize (the free set is empty)"};
+  for (const NodeId id : free) {
+    if (nodes_.count(id) == 0) return Error{"pose graph: cannot optimize missing node " + std::to_string(id)};
+  }
+  return solve([&free](NodeId id) { return free.count(id) != 0; }, *free.begin(), free.size());
+}
+
+std::set<NodeId> PoseGraph::neighbourhood(const std::vector<NodeId>& seeds, std::size_t max_nodes) const {
+  std::map<NodeId, std::vector<NodeId>> adjacent;
+  for (const RelativeFactor& f : relative_) {
+    adjacent[f.from].push_back(f.to);
+    adjacent[f.to].push_back(f.from);
+  }
+  std::set<NodeId> reached;
+  std::set<NodeId> ring;  // the nodes first reached at the current hop count, in id order
+  for (const NodeId id : seeds) {
+    if (nodes_.count(id) != 0) ring.insert(id);
+  }
+  while (!ring.empty() && reached.size() < max_nodes) {
+    std::set<NodeId> next;
+    for (const NodeId id : ring) {
+      if (reached.size() == max_nodes) break;
+      if (!reached.insert(id).second) continue;
+      const auto it = adjacent.find(id);
+      if (it == adjacent.end()) continue;
+      for (const NodeId n : it->second) next.insert(n);
+    }
+    for (auto it = next.begin(); it != next.end();) it = reached.count(*it) != 0 ? next.erase(it) : std::next(it);
+    ring = std::move(next);
+  }
+  return reached;
+}
+
+Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free, NodeId window_first,
+                                        std::size_t free_count) {
   OptimizeResult result;
-  const NodeId window_first = nodes_.lower_bound(first_free)->first;
-  const bool windowed = window_first != nodes_.begin()->first;
-  auto free = [&](NodeId id) { return id >= first_free; };
+  const bool windowed = free_count != nodes_.size();
   bool joins_held = false;  // some factor links a free node to a held one (fixes the window's gauge)
 
   std::map<NodeId, Vector6d> work = nodes_;  // the solver writes here; committed only on success
@@ -720,7 +756,7 @@ Result<OptimizeResult> PoseGraph::solve(NodeId first_free) {
   const auto t0 = std::chrono::steady_clock::now();
   ceres::Solve(options, &problem, &summary);
   result.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  result.free_nodes = static_cast<int>(std::distance(nodes_.lower_bound(first_free), nodes_.end()));
+  result.free_nodes = static_cast<int>(free_count);
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;  // iteration 0 is the initial state
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
@@ -732,8 +768,9 @@ Result<OptimizeResult> PoseGraph::solve(NodeId first_free) {
   for (const auto& [id, x] : work) {
     if (!finite6(x)) return Error{"pose graph: solver produced a non-finite estimate for node " + std::to_string(id)};
   }
-  for (auto it = work.lower_bound(first_free); it != work.end(); ++it) {
-    for (int i = kRoll; i <= kYaw; ++i) it->second(i) = geometry::wrapAngle(it->second(i));
+  for (auto& [id, x] : work) {
+    if (!free(id)) continue;
+    for (int i = kRoll; i <= kYaw; ++i) x(i) = geometry::wrapAngle(x(i));
   }
   nodes_ = std::move(work);
   return result;

@@ -83,6 +83,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(la.point_to_plane.min_correspondence_distance_m, lb.point_to_plane.min_correspondence_distance_m);
   EXPECT_NEAR(la.max_heading_difference_rad, lb.max_heading_difference_rad, 1e-4);
   EXPECT_NEAR(la.max_yaw_disagreement_rad, lb.max_yaw_disagreement_rad, 1e-4);
+  EXPECT_EQ(la.max_registrations, lb.max_registrations);
   EXPECT_EQ(la.min_overlap_fraction, lb.min_overlap_fraction);
   EXPECT_EQ(la.p2p_min_overlap_fraction, lb.p2p_min_overlap_fraction);
   EXPECT_EQ(la.acceptance.odometry_cov_x_m2_per_s, lb.acceptance.odometry_cov_x_m2_per_s);
@@ -91,6 +92,8 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_NEAR(a.mapping.roll_pitch_stddev_rad, b.mapping.roll_pitch_stddev_rad, 1e-9);
   EXPECT_EQ(a.mapping.optimize_every_submap, b.mapping.optimize_every_submap);
   EXPECT_EQ(a.mapping.optimize_closed_loop_only, b.mapping.optimize_closed_loop_only);
+  EXPECT_EQ(a.mapping.local_optimization_nodes, b.mapping.local_optimization_nodes);
+  EXPECT_EQ(a.mapping.full_optimization_every, b.mapping.full_optimization_every);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
   EXPECT_EQ(a.merge.threads, b.merge.threads);

@@ -96,6 +96,43 @@ TEST(LoopCloser, ARegistrationThatTurnsThePriorTooMuchIsRefused) {
   }
 }
 
+// max_registrations: only the candidates whose centroids are nearest the new submap's are registered,
+// the others counted as skipped. Three earlier views of the stretch, starting 0, 10 and 20 poses on.
+TEST(LoopCloser, TheRegistrationBudgetTriesTheNearestCandidates) {
+  const auto orbit = test::orbitTrajectory(120, 5.5, -2.0);
+  const auto stretch = [&](int first) {
+    return std::vector<geometry::Pose3>(orbit.begin() + first, orbit.begin() + first + 80);
+  };
+  std::vector<LoopSubmap> submaps;
+  for (const int first : {20, 0, 10}) {
+    const auto poses = stretch(first);
+    submaps.push_back({static_cast<std::int64_t>(3 * submaps.size()), gridOf(poses, submaps.size() + 1), poses.front(),
+                       static_cast<std::int64_t>(submaps.size()) * 1'000'000'000});
+  }
+  submaps.push_back({9, gridOf(stretch(0), 7), orbit.front(), 200'000'000'000});
+  for (const int budget : {0, 1, 2}) {
+    LoopCloserConfig c;
+    c.point_to_plane.max_correspondence_distance_m = 0.5;
+    c.max_registrations = budget;
+    auto closer = LoopCloser::create(c);
+    ASSERT_TRUE(closer.ok());
+    auto out = closer->closeLoops(submaps, 3);
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    const int tried = budget == 0 ? 3 : budget;
+    EXPECT_EQ(out->stats.tried, tried) << "budget " << budget;
+    EXPECT_EQ(out->stats.skipped_budget, 3 - tried) << "budget " << budget;
+    std::vector<std::int64_t> from;
+    for (const LoopClosure& lc : out->closures) from.push_back(lc.from);
+    const std::vector<std::vector<std::int64_t>> nearest = {{0, 3, 6}, {3}, {3, 6}};  // ids of 20, 0, 10 on
+    EXPECT_EQ(from, nearest[static_cast<std::size_t>(budget)]) << "budget " << budget;
+  }
+  LoopCloserConfig bad;
+  bad.max_registrations = -1;
+  auto refused = LoopCloser::create(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("max_registrations"), std::string::npos) << refused.error().message;
+}
+
 TEST(LoopCloser, ConsecutiveAndOppositeViewsAreNotTried) {
   const auto orbit = test::orbitTrajectory(40, 5.5, -2.0);
   const auto grid = gridOf(orbit, 1);

@@ -13,6 +13,7 @@
 #include <algorithm>
 
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <limits>
 
@@ -56,10 +57,11 @@ struct Outcome {
   int wrong = 0;
 };
 
-Outcome runPipeline(LoopClosureMode mode, bool closures, bool closed_loop_only = false) {
+Outcome runPipeline(LoopClosureMode mode, bool closures,
+                    const std::function<void(MappingPipelineConfig&)>& adjust = nullptr) {
   MappingPipelineConfig c = pipelineConfig(mode);
   c.loop_closures = closures;
-  c.optimize_closed_loop_only = closed_loop_only;
+  if (adjust) adjust(c);
   auto p = MappingPipeline::create(c);
   EXPECT_TRUE(p.ok());
   Outcome out;
@@ -87,6 +89,19 @@ Outcome runPipeline(LoopClosureMode mode, bool closures, bool closed_loop_only =
       std::int64_t first_free = *u->closed_submap;
       for (const LoopClosure& lc : u->closures) first_free = std::min(first_free, lc.from);
       for (const map::SubmapId id : u->moved) EXPECT_GE(static_cast<std::int64_t>(id), first_free);
+    }
+    // Bounded solves: between the whole-graph ones, at most local_optimization_nodes submaps move.
+    if (c.local_optimization_nodes > 0 && u->closed_submap &&
+        before.size() + 1 > static_cast<std::size_t>(c.local_optimization_nodes)) {
+      if (*u->closed_submap % c.full_optimization_every != 0) {
+        EXPECT_LE(u->moved.size(), static_cast<std::size_t>(c.local_optimization_nodes));
+        if (u->optimized) {
+          EXPECT_EQ(u->optimize.free_nodes, c.local_optimization_nodes);
+        }
+      } else {
+        EXPECT_TRUE(u->optimized) << "submap " << *u->closed_submap << ": the whole-graph solve is due";
+        EXPECT_EQ(u->optimize.free_nodes, static_cast<int>(before.size() + 1));
+      }
     }
     before = after;
   };
@@ -155,13 +170,31 @@ TEST(MappingPipeline, DegeneracyAwareClosuresCorrectDriftAndNoneIsWrong) {
 // Optimising only the loop each closure makes corrects the drift about as well as re-optimising the
 // whole graph every time, and moves fewer submaps.
 TEST(MappingPipeline, OptimisingTheClosedLoopOnlyCorrectsDriftAsTheWholeGraphDoes) {
-  const Outcome loop = runPipeline(LoopClosureMode::kDegenerate, true, true);
+  const Outcome loop = runPipeline(LoopClosureMode::kDegenerate, true,
+                                   [](MappingPipelineConfig& c) { c.optimize_closed_loop_only = true; });
   const Outcome whole = runPipeline(LoopClosureMode::kDegenerate, true);
   expectMapEqualsGraph(*loop.pipeline);
   EXPECT_EQ(loop.wrong, 0);
   EXPECT_LT(loop.rmse_opt_m, loop.rmse_odom_m);
   EXPECT_LT(loop.rmse_opt_m, 1.25 * whole.rmse_opt_m + 0.02)
       << "closed loop only " << loop.rmse_opt_m << " m, whole graph " << whole.rmse_opt_m << " m";
+}
+
+// Bounded solves (a few nodes around each new submap, the whole graph every fourth submap): at most
+// that many submaps move between the whole-graph solves (checked in runPipeline), and the drift is
+// corrected about as well as by solving the whole graph every time.
+TEST(MappingPipeline, BoundedSolvesCorrectDriftAsTheWholeGraphDoes) {
+  const Outcome bounded = runPipeline(LoopClosureMode::kDegenerate, true, [](MappingPipelineConfig& c) {
+    c.local_optimization_nodes = 5;
+    c.full_optimization_every = 4;
+  });
+  const Outcome whole = runPipeline(LoopClosureMode::kDegenerate, true);
+  expectMapEqualsGraph(*bounded.pipeline);
+  EXPECT_GT(bounded.pipeline->submaps().size(), 12U);
+  EXPECT_EQ(bounded.wrong, 0);
+  EXPECT_LT(bounded.rmse_opt_m, bounded.rmse_odom_m);
+  EXPECT_LT(bounded.rmse_opt_m, 1.25 * whole.rmse_opt_m + 0.02)
+      << "bounded " << bounded.rmse_opt_m << " m, whole graph " << whole.rmse_opt_m << " m";
 }
 
 TEST(MappingPipeline, WithoutClosuresSubmapsKeepTheirOdometryPoses) {

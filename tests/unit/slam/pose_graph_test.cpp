@@ -209,6 +209,56 @@ TEST(PoseGraph, OptimizingFromANodeHoldsTheOlderNodesBitForBit) {
   EXPECT_NE(none.error().message.find("40"), std::string::npos) << none.error().message;
 }
 
+// Breadth first from all seeds at once, each hop in id order, up to the budget.
+TEST(PoseGraph, NeighbourhoodIsTheNearestNodesInHops) {
+  const Scenario s = makeScenario(5, 40);
+  PoseGraph g = buildGraph(s, {});
+  ASSERT_TRUE(g.addLoopClosure(8, 28, s.truth[8].inverse() * s.truth[28], closureInformation()).ok());
+  EXPECT_EQ(g.neighbourhood({28}, 1), (std::set<NodeId>{28}));
+  EXPECT_EQ(g.neighbourhood({28}, 4), (std::set<NodeId>{8, 27, 28, 29}));
+  EXPECT_EQ(g.neighbourhood({28}, 6), (std::set<NodeId>{7, 8, 9, 27, 28, 29}));
+  EXPECT_EQ(g.neighbourhood({39, 0}, 4), (std::set<NodeId>{0, 1, 38, 39}));
+  EXPECT_EQ(g.neighbourhood({0, 39, 77}, 4), (std::set<NodeId>{0, 1, 38, 39}));  // a missing seed is no node
+  EXPECT_EQ(g.neighbourhood({5}, 1000).size(), 40U);
+  EXPECT_TRUE(g.neighbourhood({}, 10).empty());
+}
+
+// A free set holds every other node bit for bit; the whole set reaches optimize()'s optimum.
+TEST(PoseGraph, OptimizingANodeSetHoldsTheOthersBitForBit) {
+  const Scenario s = makeScenario(6, 40);
+  PoseGraph g = buildGraph(s, {});
+  addTrueClosures(g, s, 22);
+  PoseGraph whole = g;
+  PoseGraph all_free = g;
+  ASSERT_TRUE(whole.optimize().ok());
+  std::vector<Vector6d> before;
+  for (NodeId id = 0; id < 40; ++id) before.push_back(*g.estimate(id));
+  const std::set<NodeId> free = g.neighbourhood({39, 19}, 12);
+  auto r = g.optimizeNodes(free);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->free_nodes, 12);
+  EXPECT_LT(r->final_cost, r->initial_cost);
+  for (NodeId id = 0; id < 40; ++id) {
+    const Vector6d now = *g.estimate(id);
+    if (free.count(id) == 0) {
+      EXPECT_EQ(now, before[static_cast<std::size_t>(id)]) << "held node " << id;
+    } else {
+      EXPECT_NE(now, before[static_cast<std::size_t>(id)]) << "free node " << id;
+    }
+  }
+  std::set<NodeId> all;
+  for (NodeId id = 0; id < 40; ++id) all.insert(id);
+  ASSERT_TRUE(all_free.optimizeNodes(all).ok());
+  for (NodeId id = 0; id < 40; ++id) EXPECT_EQ(*all_free.estimate(id), *whole.estimate(id)) << "node " << id;
+  // A missing node or an empty set is an error that changes nothing.
+  const Vector6d kept = *g.estimate(3);
+  auto missing = g.optimizeNodes({3, 41});
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("41"), std::string::npos) << missing.error().message;
+  EXPECT_FALSE(g.optimizeNodes({}).ok());
+  EXPECT_EQ(*g.estimate(3), kept);
+}
+
 TEST(PoseGraph, LoopClosuresCorrectDrift) {
   const Scenario s = makeScenario(2, 40);
   PoseGraph g = buildGraph(s, {});

@@ -58,6 +58,11 @@ struct LoopCloserConfig {
   // most this (the thesis bounds only x-y; a wrong match between similar pilings often turns: 2 deg
   // passes 90 % of the registrations within 0.2 m / 2 deg of the truth and half of the others fail it).
   double max_yaw_disagreement_rad = 0.03491;  // 2 deg
+  // At most this many registrations per new submap (0: every candidate the gates pass), the candidates
+  // whose clouds' centroids are nearest the new one's: on a survey repeated over the same lanes every
+  // pass adds candidates, and the registrations would make the mapping time per submap grow with the
+  // mission (docs/long-mission).
+  int max_registrations = 0;
   // Fraction of the source cloud that must find a correspondence within the ICP's final bound at the
   // result (overlap): 0.3 within the point-to-plane ICP's 0.3 m. The point-to-point mode counts
   // within its fixed 1 m and keeps its own bound (at 0.3 a wrong closure passed in
@@ -97,6 +102,7 @@ struct LoopCloseStats {
   int rejected = 0;
   std::map<std::string, int> rejected_by_reason;  // cause -> count
   int skipped_heading = 0;                        // candidates skipped by the viewing-direction gate (not tried)
+  int skipped_budget = 0;                         // candidates beyond max_registrations (not tried)
   int ambiguous_directions = 0;                   // directions of tried registrations the probe dropped
   void add(const LoopCloseStats& other);
 };

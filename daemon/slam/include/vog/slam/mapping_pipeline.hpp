@@ -51,6 +51,14 @@ struct MappingPipelineConfig {
   // from later closures (harbour survey, 250 submaps: submap pose RMSE 0.48 m against 0.34 m with the
   // whole graph; daemon/slam/README.md). Without a closure only the new node is optimised.
   bool optimize_closed_loop_only = false;
+  // Bounded solves for long missions: once the graph has more than local_optimization_nodes nodes
+  // (0: never), a solve frees only that many, the nodes nearest in hops to the new submap and to the
+  // submaps its closures join (PoseGraph::neighbourhood), the rest held; so its cost and the submaps
+  // that move no longer grow with the mission. Every full_optimization_every-th submap (by index) the
+  // whole graph is solved, closure or not, so that the held part learns from the closures since
+  // (docs/long-mission). Ignored with optimize_closed_loop_only.
+  int local_optimization_nodes = 0;
+  int full_optimization_every = 25;
   // Consistency before insertion: the new submap's accepted closures enter the graph only when they
   // agree with odometry and the other closures. The graph is optimised with them; a closure whose
   // residual at that optimum is unlikely (closureConsistencyChi2 above the chi-square quantile of
@@ -77,8 +85,9 @@ double chiSquareQuantile(int k, double p);
 // The consistency check before insertion (MappingPipelineConfig::consistency_confidence): optimises
 // `without_closures` (the graph with the new node `newest`, its odometry and absolute factors) with
 // `closures`, refusing the least consistent one and optimising again while one is beyond its quantile.
-// `optimize` is empty when nothing was optimised (no closure left and optimize_every_submap off): the
-// graph is then `without_closures`.
+// The solve is the whole graph's, the closed loop's or a bounded one as `config` says. `optimize` is
+// empty when nothing was optimised (no closure left, and neither optimize_every_submap nor a whole-graph
+// solve due): the graph is then `without_closures`.
 struct ConsistentOptimum {
   PoseGraph graph;
   std::vector<bool> refused;  // per closure

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <set>
 #include <string>
@@ -75,7 +76,7 @@ Eigen::Vector3d planarOdometry(const geometry::Pose3& T_world_a, const geometry:
 struct OptimizeResult {
   bool converged = false;
   int iterations = 0;
-  int free_nodes = 0;         // nodes the solve could move (optimizeFrom: from its first node on)
+  int free_nodes = 0;         // nodes the solve could move (optimizeFrom / optimizeNodes: the free ones)
   double initial_cost = 0.0;  // Ceres cost: 0.5 * sum of robustified squared whitened residuals
   double final_cost = 0.0;
   double solve_ms = 0.0;
@@ -137,6 +138,14 @@ class PoseGraph {
   // to a held node, its first node is anchored as the first node is in optimize(). Errors as
   // optimize(), and when no node is free.
   Result<OptimizeResult> optimizeFrom(NodeId first_free);
+  // Optimises only the nodes in `free` (all existing; errors naming a missing one or an empty set),
+  // the others held as in optimizeFrom(): the cost follows the free set and its factors. When no
+  // factor joins the free set to a held node, its lowest id is anchored (or the first node, if free).
+  Result<OptimizeResult> optimizeNodes(const std::set<NodeId>& free);
+  // Up to `max_nodes` existing nodes nearest to `seeds` in hops over the relative factors, breadth
+  // first from all seeds at once, each hop's nodes taken in id order (deterministic). The free set of
+  // a local solve around a new node and the nodes its closures reach.
+  std::set<NodeId> neighbourhood(const std::vector<NodeId>& seeds, std::size_t max_nodes) const;
 
   bool hasNode(NodeId id) const { return nodes_.count(id) != 0; }
   Result<geometry::Pose3> pose(NodeId id) const;
@@ -155,8 +164,8 @@ class PoseGraph {
  private:
   explicit PoseGraph(const PoseGraphConfig& config) : config_(config) {}
   Status checkNodes(NodeId from, NodeId to, const char* what) const;
-  // optimize() over the nodes with id >= first_free (every node: the lowest id or below).
-  Result<OptimizeResult> solve(NodeId first_free);
+  // optimize() over the `free_count` nodes for which `free` holds, the lowest of them window_first.
+  Result<OptimizeResult> solve(const std::function<bool(NodeId)>& free, NodeId window_first, std::size_t free_count);
 
   enum class RelativeKind { kOdometry, kLoopClosure, kPartialLoopClosure, kSe2, kSe3 };
   // A relative factor. Odometry and closures: residual = sqrt_information * P * (h(from, to) -
