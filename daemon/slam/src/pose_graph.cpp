@@ -646,9 +646,10 @@ std::set<NodeId> PoseGraph::neighbourhood(const std::vector<NodeId>& seeds, std:
       if (!reached.insert(id).second) continue;
       const auto it = adjacent.find(id);
       if (it == adjacent.end()) continue;
-      for (const NodeId n : it->second) next.insert(n);
+      for (const NodeId n : it->second) {
+        if (reached.count(n) == 0) next.insert(n);
+      }
     }
-    for (auto it = next.begin(); it != next.end();) it = reached.count(*it) != 0 ? next.erase(it) : std::next(it);
     ring = std::move(next);
   }
   return reached;

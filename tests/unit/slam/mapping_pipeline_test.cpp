@@ -286,6 +286,14 @@ TEST(MappingPipeline, ConfigValidationNamesTheKey) {
   c.loop_closer.max_heading_difference_rad = 0.0;
   ASSERT_FALSE(c.validate().ok());
   EXPECT_NE(c.validate().error().message.find("max_heading_difference_rad"), std::string::npos);
+  c = {};
+  c.local_optimization_nodes = -1;
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("local_optimization_nodes"), std::string::npos);
+  c = {};
+  c.full_optimization_every = 0;
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("full_optimization_every"), std::string::npos);
   EXPECT_TRUE(parseLoopClosureMode("p2p").ok());
   EXPECT_FALSE(parseLoopClosureMode("p2pl").ok());
 }
