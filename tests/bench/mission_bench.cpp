@@ -48,7 +48,8 @@
 // reach the vehicle one by one through the current navigation error. The planner still plans on the
 // newest snapshot every --plan-every-s of simulated time (measured; its waypoints are not followed).
 // --report-every K with --series FILE writes one JSON line per K closed submaps: memory (VmRSS,
-// VmHWM), mapping time per closed submap, pose-graph optimisation, merges (all, and those right after
+// VmHWM), mapping time per closed submap (and its phases: graph, search, optimize, commit, build),
+// pose-graph optimisation, merges (all, and those right after
 // an accepted loop closure), planning, and the real-time factor, each over the last K submaps.
 // --evaluate 0 skips the evaluation (observable set, reference grid at true poses, coverage, RMSE,
 // closures against the truth), so that memory and time are the mission's own.
@@ -74,6 +75,7 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -308,6 +310,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       "loop closures: viewing-direction gate, deg");
   app.add_option("--graph-function-tolerance", mc.graph.function_tolerance,
                  "mapping: the pose graph solver's relative cost change that ends it");
+  app.add_option("--sparse-backend", mc.graph.sparse_backend, "mapping: the pose graph's sparse Cholesky")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, vog::slam::SparseBackend>{
+          {"eigen", vog::slam::SparseBackend::kEigen}, {"suitesparse", vog::slam::SparseBackend::kSuiteSparse}}));
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
   app.add_option("--lc-max-registrations", mc.loop_closer.max_registrations,
@@ -470,7 +475,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   // feed() runs on this thread: its CPU time too (the wall time includes waiting for a shared core).
   std::vector<double> mapping_ms_per_submap, mapping_cpu_ms_per_submap, optimize_ms_all, optimize_iterations_all;
   double mapping_s_open = 0.0, mapping_cpu_s_open = 0.0;  // feed() time since the last closed submap
-  bool series_row_due = false;                            // a multiple of --report-every submaps was just closed
+  // Per closed submap, where process() spent it (graph, search, optimize, commit) and the rest of
+  // feed() (building the submap from its scans).
+  std::array<std::vector<double>, 5> mapping_phase_ms;
+  bool series_row_due = false;  // a multiple of --report-every submaps was just closed
   ScanQueue queue;
   queue.record_truth = evaluate;
   auto simS = [&] { return 1e-9 * static_cast<double>(simulation.stampNs()); };
@@ -551,6 +559,14 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
           base_truth.emplace(*u->closed_submap, it->second);
         open_truth.erase(open_truth.begin(), open_truth.lower_bound(p.input.scan.stamp_ns));
         mapping_ms_per_submap.push_back(1e3 * mapping_s_open);
+        const slam::MappingPhaseTimes& t = u->phase_times;
+        const double process_ms = t.graph_ms + t.search_ms + t.optimize_ms + t.commit_ms;
+        for (const auto& [k, ms] : {std::pair{0, t.graph_ms},
+                                    {1, t.search_ms},
+                                    {2, t.optimize_ms},
+                                    {3, t.commit_ms},
+                                    {4, 1e3 * mapping_s_open - process_ms}})
+          mapping_phase_ms[static_cast<std::size_t>(k)].push_back(ms);
         mapping_cpu_ms_per_submap.push_back(1e3 * mapping_cpu_s_open);
         mapping_s_open = mapping_cpu_s_open = 0.0;
         if (report_every > 0 && pipeline.submaps().size() % static_cast<std::size_t>(report_every) == 0)
@@ -662,6 +678,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     row.add("mapping_ms_median", vog::bench::median(mapping_ms));
     row.add("mapping_ms_max", vog::bench::percentile(mapping_ms, 1.0));
     row.add("mapping_cpu_ms_median", vog::bench::median(mapping_cpu_ms));
+    const char* phase_names[] = {"graph", "search", "optimize", "commit", "build"};
+    for (std::size_t k = 0; k < mapping_phase_ms.size(); ++k)
+      row.add(std::string("mapping_") + phase_names[k] + "_ms_median",
+              vog::bench::median(since(mapping_phase_ms[k], mark.mapping)));
     row.add("optimizations", static_cast<std::int64_t>(optimize_ms.size()));
     row.add("optimize_ms_median", vog::bench::median(optimize_ms));
     row.add("optimize_ms_max", vog::bench::percentile(optimize_ms, 1.0));

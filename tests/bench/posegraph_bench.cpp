@@ -75,9 +75,9 @@ void addChainNode(ChainGraph& g, int k, std::mt19937_64& rng, Pose3& T_odom) {
   }
 }
 
-int chainBench(int n) {
+int chainBench(int n, const vog::slam::PoseGraphConfig& config) {
   std::mt19937_64 rng(7);
-  ChainGraph g{vog::slam::PoseGraph::create().value(), 0};
+  ChainGraph g{vog::slam::PoseGraph::create(config).value(), 0};
   Pose3 T_odom = Pose3::Identity();
   for (int k = 0; k < n - 1; ++k) addChainNode(g, k, rng, T_odom);
   // Cold: every estimate from odometry.
@@ -146,6 +146,10 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
   std::string init = "file";
   bool json = false;
   int chain = 0;
+  vog::slam::PoseGraphConfig config;
+  app.add_option("--sparse-backend", config.sparse_backend, "sparse Cholesky: eigen or suitesparse")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, vog::slam::SparseBackend>{
+          {"eigen", vog::slam::SparseBackend::kEigen}, {"suitesparse", vog::slam::SparseBackend::kSuiteSparse}}));
   app.add_option("--g2o", g2o_path, "g2o file (VERTEX_SE2/EDGE_SE2 or VERTEX_SE3:QUAT/EDGE_SE3:QUAT)");
   app.add_option("--chain", chain, "instead of a file: the mapping pipeline's graph after this many submaps")
       ->check(CLI::Range(42, 100000));
@@ -162,7 +166,7 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
     return app.exit(e);
   }
 
-  if (chain > 0) return chainBench(chain);
+  if (chain > 0) return chainBench(chain, config);
   if (g2o_path.empty()) {
     std::fprintf(stderr, "posegraph: --g2o or --chain is required\n");
     return 1;
@@ -189,7 +193,7 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
     }
     graph = std::move(initialised);
   }
-  auto result = vog::slam::optimizeG2o(*graph);
+  auto result = vog::slam::optimizeG2o(*graph, config);
   if (!result) {
     std::fprintf(stderr, "posegraph: %s\n", result.error().message.c_str());
     return 1;

@@ -119,6 +119,8 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.boolean("optimize_closed_loop_only", c.optimize_closed_loop_only);
   m.integer("local_optimization_nodes", c.local_optimization_nodes, 0, 1'000'000);
   m.integer("full_optimization_every", c.full_optimization_every, 1, 1'000'000);
+  m.enumeration("sparse_backend", c.graph.sparse_backend,
+                {{"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}});
   m.finish();
 }
 

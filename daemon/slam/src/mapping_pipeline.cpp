@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -284,6 +285,12 @@ Result<MappingUpdate> MappingPipeline::finish() {
 
 Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   MappingUpdate update;
+  auto lap = [t = std::chrono::steady_clock::now()]() mutable {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+  };
   const NodeId id = closed.index;
   // All graph changes happen on a copy, committed only when every step succeeded.
   PoseGraph graph = graph_;
@@ -320,6 +327,8 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     return Error{"mapping: " + s.error().message};
   }
 
+  update.phase_times.graph_ms = lap();
+
   // Loop closures against the other submaps at their current estimates.
   SubmapRecord record;
   record.index = id;
@@ -348,6 +357,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     update.closures = std::move(outcome->closures);
     update.loop_stats = outcome->stats;
   }
+  update.phase_times.search_ms = lap();
 
   auto optimum = optimizeConsistent(graph, update.closures, id, config_);
   if (!optimum) return Error{"mapping: " + optimum.error().message};
@@ -369,6 +379,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     }
     update.closures = std::move(kept);
   }
+  update.phase_times.optimize_ms = lap();
 
   // Without an optimisation the other estimates did not change: their poses are the ones kept.
   std::vector<geometry::Pose3> poses;
@@ -408,6 +419,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   stats_.add(update.loop_stats);
   update.closed_submap = id;
   update.closed = std::move(closed);
+  update.phase_times.commit_ms = lap();
   return update;
 }
 

@@ -749,7 +749,7 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   options.logging_type = ceres::SILENT;
   options.minimizer_progress_to_stdout = false;
   std::string note;
-  detail::selectLinearSolver(options, result.linear_solver, note);
+  detail::selectLinearSolver(options, config_.sparse_backend, result.linear_solver, note);
   std::string why;
   if (!options.IsValid(&why)) return Error{"pose graph: invalid solver options: " + why};
 

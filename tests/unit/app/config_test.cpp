@@ -94,6 +94,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.optimize_closed_loop_only, b.mapping.optimize_closed_loop_only);
   EXPECT_EQ(a.mapping.local_optimization_nodes, b.mapping.local_optimization_nodes);
   EXPECT_EQ(a.mapping.full_optimization_every, b.mapping.full_optimization_every);
+  EXPECT_EQ(a.mapping.graph.sparse_backend, b.mapping.graph.sparse_backend);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
   EXPECT_EQ(a.merge.threads, b.merge.threads);
@@ -235,6 +236,9 @@ TEST(VogdConfig, WrongTypesAndSyntaxAreRefused) {
       errorOf("source: devices\nmission: {box_min_m: [1, 2]}\n").find("mission.box_min_m: must be a list of 3 numbers"),
       std::string::npos);
   EXPECT_NE(errorOf("source: satellite\n").find("source: must be one of sim, devices, got 'satellite'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmapping: {sparse_backend: cxsparse}\n")
+                .find("mapping.sparse_backend: must be one of eigen, suitesparse, got 'cxsparse'"),
             std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping: [1, 2]\n").find("mapping: must be a mapping"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping:\n  grid: {resolution_m: 0.1\n").find("test.yaml:"), std::string::npos);

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -68,8 +68,12 @@ Outcome runPipeline(LoopClosureMode mode, bool closures,
   out.pipeline = std::move(p.value());
   const slam::testing::Run& run = sharedRun();
   std::vector<geometry::Pose3> before;
-  auto check = [&](const Result<MappingUpdate>& u) {
+  auto check = [&](const Result<MappingUpdate>& u, double feed_ms) {
     ASSERT_TRUE(u.ok()) << u.error().message;
+    // The phase times split the closing call's time: each >= 0, together no more than the call took.
+    const MappingPhaseTimes& t = u->phase_times;
+    for (const double ms : {t.graph_ms, t.search_ms, t.optimize_ms, t.commit_ms}) EXPECT_GE(ms, 0.0);
+    EXPECT_LE(t.graph_ms + t.search_ms + t.optimize_ms + t.commit_ms, feed_ms);
     const std::vector<geometry::Pose3> after = out.pipeline->map().poses();
     if (u->closed_submap) {
       ASSERT_EQ(after.size(), before.size() + 1);
@@ -105,8 +109,13 @@ Outcome runPipeline(LoopClosureMode mode, bool closures,
     }
     before = after;
   };
-  for (const ScanInput& in : run.inputs) check(out.pipeline->feed(in));
-  check(out.pipeline->finish());
+  auto timed = [&](const std::function<Result<MappingUpdate>()>& call) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Result<MappingUpdate> u = call();
+    check(u, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  };
+  for (const ScanInput& in : run.inputs) timed([&] { return out.pipeline->feed(in); });
+  timed([&] { return out.pipeline->finish(); });
   double se_odom = 0.0;
   double se_opt = 0.0;
   for (const SubmapRecord& r : out.pipeline->submaps()) {

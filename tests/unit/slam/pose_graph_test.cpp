@@ -276,6 +276,30 @@ TEST(PoseGraph, LoopClosuresCorrectDrift) {
   EXPECT_NEAR(x0(kYaw), toXyzRpy(s.truth[0])(kYaw), 1e-12);
 }
 
+// The two sparse Cholesky backends solve the same normal equations: the same optimum, each named.
+TEST(PoseGraph, SparseBackendsReachTheSameOptimum) {
+  const Scenario s = makeScenario(4, 40);
+  std::vector<Pose3> optimum[2];
+  const SparseBackend backends[] = {SparseBackend::kEigen, SparseBackend::kSuiteSparse};
+  for (int b = 0; b < 2; ++b) {
+    PoseGraphConfig config;
+    config.sparse_backend = backends[b];
+    PoseGraph g = buildGraph(s, config);
+    addTrueClosures(g, s, 40);
+    auto r = g.optimize();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r->converged) << r->message;
+    EXPECT_GT(r->iterations, 1);
+    EXPECT_EQ(r->linear_solver, b == 0 ? "SPARSE_NORMAL_CHOLESKY/EIGEN_SPARSE" : "SPARSE_NORMAL_CHOLESKY/SUITE_SPARSE")
+        << r->message;
+    for (std::size_t i = 0; i < s.truth.size(); ++i) optimum[b].push_back(*g.pose(static_cast<NodeId>(i)));
+  }
+  for (std::size_t i = 0; i < s.truth.size(); ++i) {
+    EXPECT_LT(geometry::translationDistance(optimum[0][i], optimum[1][i]), 1e-9) << i;
+    EXPECT_LT(geometry::rotationAngle(optimum[0][i], optimum[1][i]), 1e-9) << i;
+  }
+}
+
 // Test (3): random wrong closures are down-weighted by the robust loss.
 TEST(PoseGraph, OutlierClosuresDownWeightedByCauchyLoss) {
   const Scenario s = makeScenario(3, 40);

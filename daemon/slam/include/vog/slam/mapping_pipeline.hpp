@@ -98,6 +98,15 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
                                              const MappingPipelineConfig& config);
 
 // What one feed()/finish() changed.
+// Where process() spent its time for one closed submap (wall ms, steady clock; figures only, no
+// algorithm reads them).
+struct MappingPhaseTimes {
+  double graph_ms = 0.0;     // copying the graph and adding the new node's factors
+  double search_ms = 0.0;    // loop-closure candidate search and registrations (LoopCloser::closeLoops)
+  double optimize_ms = 0.0;  // optimizeConsistent: every solve and consistency pass, with its graph copies
+  double commit_ms = 0.0;    // poses read back, VogMap add + deform, records updated
+};
+
 struct MappingUpdate {
   std::optional<std::int64_t> closed_submap;  // index (= VogMap id = graph node id) of a new submap
   std::vector<LoopClosure> closures;          // accepted for it
@@ -108,6 +117,7 @@ struct MappingUpdate {
   // The new submap as the builder closed it (grid, odometry factor, absolute measurement): what a
   // mission store persists so that restore() can rebuild the graph. Set iff closed_submap is.
   std::optional<ClosedSubmap> closed;
+  MappingPhaseTimes phase_times;  // set iff closed_submap is
 };
 
 // The record of one submap: odometry and current (optimised) base pose.

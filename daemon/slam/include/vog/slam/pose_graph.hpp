@@ -9,8 +9,9 @@
 //  - SE2 and SE3 relative poses with g2o's error (EDGE_SE2, EDGE_SE3:QUAT; see g2o.hpp), no robust
 //    loss: the public datasets are checked through this class, on the solver vogd runs.
 // Every residual is whitened by U = L^T with L L^T = Omega (see information.hpp).
-// Solved with Ceres (Levenberg-Marquardt, sparse normal Cholesky on SuiteSparse when that backend
-// is compiled in, else Eigen's sparse Cholesky; OptimizeResult::linear_solver says which).
+// Solved with Ceres (Levenberg-Marquardt, sparse normal Cholesky on the configured backend, Eigen's
+// or SuiteSparse's CHOLMOD, falling back to the other when it is not compiled in;
+// OptimizeResult::linear_solver says which).
 
 #include "vog/geometry/pose.hpp"
 #include "vog/core/result.hpp"
@@ -31,6 +32,10 @@ using NodeId = std::int64_t;
 
 enum class RobustLoss { kNone, kHuber, kCauchy };
 
+// The sparse Cholesky behind each Levenberg-Marquardt step. Both reach the same optimum (to
+// rounding, about 1e-14 m); their speed differs (daemon/slam/README.md, "Pose-graph solve time").
+enum class SparseBackend { kEigen, kSuiteSparse };
+
 struct PoseGraphConfig {
   RobustLoss loop_closure_loss = RobustLoss::kCauchy;
   // Scale of the robust loss in whitened units (standard deviations): residuals beyond it are
@@ -47,6 +52,7 @@ struct PoseGraphConfig {
   // Odometry and loop closures are relative in x, y, yaw: hold those of the first node added
   // (gauge freedom). Its z, roll and pitch stay free under its absolute factor.
   bool anchor_first_node = true;
+  SparseBackend sparse_backend = SparseBackend::kSuiteSparse;
 
   Status validate() const;
 };
