@@ -1,8 +1,11 @@
 #pragma once
 // What the vog-bench subcommands share: command-line parsing with CLI11, the API benches' secret.
 
+#include "vog/slam/pose_graph.hpp"
+
 #include <CLI/CLI.hpp>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +24,13 @@ inline std::optional<int> parseArgs(CLI::App& app, const std::vector<std::string
     return app.exit(e);
   }
   return std::nullopt;
+}
+
+// --sparse-backend eigen|suitesparse: the pose graph's sparse Cholesky (PoseGraphConfig::sparse_backend).
+inline void addSparseBackendOption(CLI::App& app, slam::SparseBackend& field, const std::string& description) {
+  app.add_option("--sparse-backend", field, description)
+      ->transform(CLI::CheckedTransformer(std::map<std::string, slam::SparseBackend>{
+          {"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}}));
 }
 
 }  // namespace vog::bench

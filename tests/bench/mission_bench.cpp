@@ -310,9 +310,11 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       "loop closures: viewing-direction gate, deg");
   app.add_option("--graph-function-tolerance", mc.graph.function_tolerance,
                  "mapping: the pose graph solver's relative cost change that ends it");
-  app.add_option("--sparse-backend", mc.graph.sparse_backend, "mapping: the pose graph's sparse Cholesky")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, vog::slam::SparseBackend>{
-          {"eigen", vog::slam::SparseBackend::kEigen}, {"suitesparse", vog::slam::SparseBackend::kSuiteSparse}}));
+  app.add_option("--graph-max-iterations", mc.graph.max_iterations,
+                 "mapping: at most this many Levenberg-Marquardt iterations per pose-graph solve")
+      ->check(CLI::Range(1, 100'000));
+  vog::bench::addSparseBackendOption(app, mc.graph.sparse_backend,
+                                     "mapping: the pose graph's sparse Cholesky, eigen or suitesparse");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
   app.add_option("--lc-max-registrations", mc.loop_closer.max_registrations,

@@ -5,6 +5,7 @@
 // attitude factors along laps of an orbit, a partial loop closure every few submaps to the submap one lap
 // earlier): the time of one optimize() from odometry, of the pipeline's step (one new node and closure
 // on an optimised graph), and of copying the graph.
+#include "bench_cli.hpp"
 #include "bench_registry.hpp"
 
 #include "vog/slam/g2o.hpp"
@@ -147,9 +148,7 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
   bool json = false;
   int chain = 0;
   vog::slam::PoseGraphConfig config;
-  app.add_option("--sparse-backend", config.sparse_backend, "sparse Cholesky: eigen or suitesparse")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, vog::slam::SparseBackend>{
-          {"eigen", vog::slam::SparseBackend::kEigen}, {"suitesparse", vog::slam::SparseBackend::kSuiteSparse}}));
+  vog::bench::addSparseBackendOption(app, config.sparse_backend, "sparse Cholesky: eigen or suitesparse");
   app.add_option("--g2o", g2o_path, "g2o file (VERTEX_SE2/EDGE_SE2 or VERTEX_SE3:QUAT/EDGE_SE3:QUAT)");
   app.add_option("--chain", chain, "instead of a file: the mapping pipeline's graph after this many submaps")
       ->check(CLI::Range(42, 100000));
