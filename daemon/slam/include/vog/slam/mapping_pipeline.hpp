@@ -97,7 +97,6 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
                                              const std::vector<LoopClosure>& closures, NodeId newest,
                                              const MappingPipelineConfig& config);
 
-// What one feed()/finish() changed.
 // Where process() spent its time for one closed submap (wall ms, steady clock; figures only, no
 // algorithm reads them).
 struct MappingPhaseTimes {
@@ -107,6 +106,7 @@ struct MappingPhaseTimes {
   double commit_ms = 0.0;    // poses read back, VogMap add + deform, records updated
 };
 
+// What one feed()/finish() changed.
 struct MappingUpdate {
   std::optional<std::int64_t> closed_submap;  // index (= VogMap id = graph node id) of a new submap
   std::vector<LoopClosure> closures;          // accepted for it

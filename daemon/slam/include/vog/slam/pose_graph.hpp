@@ -33,7 +33,7 @@ using NodeId = std::int64_t;
 enum class RobustLoss { kNone, kHuber, kCauchy };
 
 // The sparse Cholesky behind each Levenberg-Marquardt step. Both reach the same optimum (to
-// rounding, about 1e-14 m); their speed differs (daemon/slam/README.md, "Pose-graph solve time").
+// rounding, about 1e-14 m); their speed differs with the graph (measured in daemon/slam/README.md).
 enum class SparseBackend { kEigen, kSuiteSparse };
 
 struct PoseGraphConfig {
