@@ -233,35 +233,64 @@ void TraversabilityGrid::recompute(KeyBox region) {
             [&](int y, bool v) { oy.v[oy.index(x, y, z)] = v ? 1 : 0; });
       }
   } else {
-    // A cylinder: per layer, row prefix counts of blocked voxels, then for each voxel one window per
-    // row of the disc.
-    auto blockedAt = [&](int x, int y, int z) -> int {
-      const VoxelKey k(x, y, z);
-      return grid_.contains(k) ? (status_[indexOf(k)] != kFree ? 1 : 0) : 1;
-    };
+    // A cylinder, per layer in O(voxels): a blocked voxel at (x', y + dy) reaches x when
+    // |x - x'| <= disc_half_width_[|dy|], and the half-width shrinks as |dy| grows, so of each column
+    // only the blocked voxel nearest in y matters. First, for every column, the distance in y from each
+    // row of the region to the nearest blocked voxel (two sweeps); then, per row, the union of the
+    // windows those voxels open in x (a difference array). The same flags as testing every row of the
+    // disc for every voxel, without the factor 2 r + 1.
     const int r = r_.y();
     const int x0 = region.min.x() - r, nx = region.max.x() + r - x0 + 1;
     const int y0 = region.min.y() - r, ny = region.max.y() + r - y0 + 1;
-    std::vector<int> prefix(static_cast<std::size_t>(nx + 1) * static_cast<std::size_t>(ny));
-    auto rowOf = [&](int y) {
-      return prefix.data() + static_cast<std::size_t>(y - y0) * static_cast<std::size_t>(nx + 1);
-    };
+    const auto at = [nx](int x, int y) { return static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + x; };
+    const int none = r + 1;                               // no blocked voxel within r rows
+    std::vector<std::uint8_t> blocked(at(0, ny));         // [y - y0][x - x0]
+    std::vector<int> nearest(at(0, ny));                  // [y - y0][x - x0]: rows to the nearest blocked voxel
+    std::vector<int> last(static_cast<std::size_t>(nx));  // per column: the last blocked row seen in a sweep
+    std::vector<int> cover(static_cast<std::size_t>(region.max.x() - region.min.x() + 2));
     for (int z = b.min.z(); z <= b.max.z(); ++z) {
-      for (int y = y0; y < y0 + ny; ++y) {
-        int* row = rowOf(y);
-        row[0] = 0;
-        for (int i = 0; i < nx; ++i) row[i + 1] = row[i] + blockedAt(x0 + i, y, z);
-      }
-      for (int y = region.min.y(); y <= region.max.y(); ++y)
-        for (int x = region.min.x(); x <= region.max.x(); ++x) {
-          bool hit = false;
-          for (int dy = -r; dy <= r && !hit; ++dy) {
-            const int w = disc_half_width_[static_cast<std::size_t>(std::abs(dy))];
-            const int* row = rowOf(y + dy);
-            hit = row[x + w - x0 + 1] - row[x - w - x0] > 0;
-          }
-          oy.v[oy.index(x, y, z)] = hit ? 1 : 0;
+      for (int j = 0; j < ny; ++j) {
+        const int y = y0 + j;
+        std::uint8_t* row = blocked.data() + at(0, j);
+        if (y < grid_.min.y() || y > grid_.max.y()) {
+          std::fill(row, row + nx, std::uint8_t{1});
+          continue;
         }
+        const std::uint8_t* status = status_.data() + indexOf(VoxelKey(grid_.min.x(), y, z));
+        for (int i = 0; i < nx; ++i) {
+          const int x = x0 + i;
+          row[i] = x < grid_.min.x() || x > grid_.max.x() || status[x - grid_.min.x()] != kFree;
+        }
+      }
+      std::fill(last.begin(), last.end(), std::numeric_limits<int>::min() / 2);
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          if (blocked[at(i, j)] != 0) last[static_cast<std::size_t>(i)] = j;
+          nearest[at(i, j)] = std::min(j - last[static_cast<std::size_t>(i)], none);
+        }
+      std::fill(last.begin(), last.end(), std::numeric_limits<int>::max() / 2);
+      for (int j = ny - 1; j >= 0; --j)
+        for (int i = 0; i < nx; ++i) {
+          if (blocked[at(i, j)] != 0) last[static_cast<std::size_t>(i)] = j;
+          nearest[at(i, j)] = std::min(nearest[at(i, j)], last[static_cast<std::size_t>(i)] - j);
+        }
+      for (int y = region.min.y(); y <= region.max.y(); ++y) {
+        std::fill(cover.begin(), cover.end(), 0);
+        const int* dist = nearest.data() + at(0, y - y0);
+        for (int i = 0; i < nx; ++i) {
+          if (dist[i] > r) continue;
+          const int w = disc_half_width_[static_cast<std::size_t>(dist[i])];
+          const int lo = std::max(x0 + i - w, region.min.x()), hi = std::min(x0 + i + w, region.max.x());
+          if (lo > hi) continue;
+          ++cover[static_cast<std::size_t>(lo - region.min.x())];
+          --cover[static_cast<std::size_t>(hi + 1 - region.min.x())];
+        }
+        int covered = 0;
+        for (int x = region.min.x(); x <= region.max.x(); ++x) {
+          covered += cover[static_cast<std::size_t>(x - region.min.x())];
+          oy.v[oy.index(x, y, z)] = covered > 0 ? 1 : 0;
+        }
+      }
     }
   }
   for (int y = region.min.y(); y <= region.max.y(); ++y)

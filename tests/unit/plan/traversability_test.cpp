@@ -246,6 +246,59 @@ TEST(Traversability, CarvedRoomMarginsAndPathHome) {
   EXPECT_NE(bad.error().message.find("goal"), std::string::npos);
 }
 
+// Every voxel, not a sample: a room with walls full of gaps (unknown) and pillars of one voxel
+// scattered inside; the cylinder's safe flags equal the disc definition evaluated on the grid's own
+// status copy at every voxel of the room.
+TEST(Traversability, CylinderSafeFlagIsTheDiscDefinitionAtEveryVoxelOfARoom) {
+  const map::GridConfig config;
+  const double res = config.resolution_m;
+  const Eigen::AlignedBox3d room(Eigen::Vector3d(-2.5, -2.0, -1.5), Eigen::Vector3d(2.5, 2.0, -0.7));
+  const auto walls =
+      test_fixtures::carvedGrid(config, room, [](const map::VoxelKey& k) { return (k.x() + 2 * k.y()) % 3 != 0; });
+  auto pillars = map::LocalGrid::create(config).value();
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> ux(-2.3, 2.3), uy(-1.8, 1.8), uz(-1.4, -0.8);
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
+    const map::BeamEnd hit{p, true};
+    ASSERT_TRUE(pillars->insertRays(p - Eigen::Vector3d(0.0, 0.0, 2.0 * res), {&hit, 1}).ok());
+  }
+  pillars->finalize();
+  const auto map = test_fixtures::mergedOf(config, {walls, std::shared_ptr<const map::LocalGrid>(std::move(pillars))});
+  const Footprint cylinder = Footprint::cylinder(1.3, 0.3);
+  const auto grid = TraversabilityGrid::build(*map, room, cylinder).value();
+  const Eigen::Vector3i r = grid.inflationVoxels();
+  const double rho = 0.5 * cylinder.size_m.x() / res;
+  const map::KeyBox& keys = grid.gridKeys();
+  auto blocked = [&](const map::VoxelKey& k) {
+    if (!keys.contains(k)) return true;
+    const map::VoxelKey d = k - keys.min;
+    const std::size_t i = static_cast<std::size_t>(d.x()) +
+                          static_cast<std::size_t>(grid.gridSize().x()) *
+                              (static_cast<std::size_t>(d.y()) +
+                               static_cast<std::size_t>(grid.gridSize().y()) * static_cast<std::size_t>(d.z()));
+    return grid.statusArray()[i] != static_cast<std::uint8_t>(map::Occupancy::kFree);
+  };
+  const map::KeyBox inside = test_fixtures::centreKeys(room, res);
+  int safe = 0, unsafe = 0;
+  map::VoxelKey v;
+  for (v.z() = inside.min.z(); v.z() <= inside.max.z(); ++v.z())
+    for (v.y() = inside.min.y(); v.y() <= inside.max.y(); ++v.y())
+      for (v.x() = inside.min.x(); v.x() <= inside.max.x(); ++v.x()) {
+        bool expect = true;
+        for (int dz = -r.z(); dz <= r.z() && expect; ++dz)
+          for (int dy = -r.y(); dy <= r.y() && expect; ++dy)
+            for (int dx = -r.x(); dx <= r.x() && expect; ++dx) {
+              const double mx = std::max(std::abs(dx) - 1, 0), my = std::max(std::abs(dy) - 1, 0);
+              if (mx * mx + my * my <= rho * rho && blocked(v + map::VoxelKey(dx, dy, dz))) expect = false;
+            }
+        ASSERT_EQ(grid.isSafeKey(v), expect) << v.transpose();
+        (expect ? safe : unsafe) += 1;
+      }
+  EXPECT_GT(safe, 200) << unsafe;
+  EXPECT_GT(unsafe, 200) << safe;
+}
+
 TEST(Traversability, PathAroundAWallThroughADoor) {
   // Two rooms joined by a 1.5 m wide door in a wall at x = 0: the path must go through the door.
   const Eigen::AlignedBox3d west(Eigen::Vector3d(-4.0, -3.0, -2.0), Eigen::Vector3d(-0.2, 3.0, -0.8));
