@@ -93,16 +93,19 @@ bool SonarGain::castCached(const TraversabilityGrid& cache, const Eigen::Vector3
   const double w[3] = {w_unknown_, w_free_, w_occupied_};  // indexed by map::Occupancy
   static_assert(static_cast<int>(map::Occupancy::kUnknown) == 0 && static_cast<int>(map::Occupancy::kFree) == 1 &&
                 static_cast<int>(map::Occupancy::kOccupied) == 2);
-  int inside[3];  // steps left along each axis before leaving the box
-  int diff[3];    // last - key per axis
-  int l1 = 0;
-  for (int i = 0; i < 3; ++i) {
-    inside[i] = step[i] > 0 ? box_keys_.max[i] - key[i] : (step[i] < 0 ? key[i] - box_keys_.min[i] : 0);
-    diff[i] = last[i] - key[i];
-    l1 += std::abs(diff[i]);
-  }
-  const double tm_delta[3] = {t_delta[0], t_delta[1], t_delta[2]};
-  double tm[3] = {t_max[0], t_max[1], t_max[2]};
+  // Per axis, in scalars so that the whole walk state stays in registers: the steps left inside the
+  // box, last - key, the boundary parameter and its increment, and the index increments.
+  auto insideAlong = [&](int i) {
+    return step[i] > 0 ? box_keys_.max[i] - key[i] : (step[i] < 0 ? key[i] - box_keys_.min[i] : 0);
+  };
+  int in0 = insideAlong(0), in1 = insideAlong(1), in2 = insideAlong(2);
+  int d0 = last[0] - key[0], d1 = last[1] - key[1], d2 = last[2] - key[2];
+  const int s0 = step[0], s1 = step[1], s2 = step[2];
+  int l1 = std::abs(d0) + std::abs(d1) + std::abs(d2);
+  double t0 = t_max[0], t1 = t_max[1], t2 = t_max[2];
+  const double dt0 = t_delta[0], dt1 = t_delta[1], dt2 = t_delta[2];
+  const std::int64_t ds0 = s0 * status_stride[0], ds1 = s1 * status_stride[1], ds2 = s2 * status_stride[2];
+  const std::int64_t de0 = s0 * seen_stride[0], de1 = s1 * seen_stride[1], de2 = s2 * seen_stride[2];
   double added = 0.0;
   long visited = 0;
   const long max_steps = 3 + l1;
@@ -117,18 +120,29 @@ bool SonarGain::castCached(const TraversabilityGrid& cache, const Eigen::Vector3
     }
     if (status == static_cast<std::uint8_t>(map::Occupancy::kOccupied)) break;
     if (l1 == 0) break;
-    // Same choice as traverse's two ifs, written so that it compiles to conditional moves (the
-    // branches mispredict about every other voxel).
-    const int a01 = tm[1] < tm[0] ? 1 : 0;
-    const int axis = tm[2] < tm[a01] ? 2 : a01;
-    if (tm[axis] > 1.0) break;
+    // Same choice as traverse's two ifs (ties: the lowest axis), as selects rather than branches
+    // (the branches mispredict about every other voxel).
+    const bool y_first = t1 < t0;
+    const double t01 = y_first ? t1 : t0;
+    const bool z = t2 < t01;
+    const bool y = !z && y_first;
+    const bool x = !z && !y_first;
+    if ((z ? t2 : t01) > 1.0) break;
     // Out of the box for good: nothing further counts, and occlusion no longer matters.
-    if (--inside[axis] < 0) break;
-    l1 += std::abs(diff[axis] - step[axis]) - std::abs(diff[axis]);
-    diff[axis] -= step[axis];
-    tm[axis] += tm_delta[axis];
-    status_i += step[axis] * status_stride[axis];
-    seen_i += step[axis] * seen_stride[axis];
+    in0 -= x;
+    in1 -= y;
+    in2 -= z;
+    if ((in0 | in1 | in2) < 0) break;
+    l1 += x ? std::abs(d0 - s0) - std::abs(d0)
+            : (y ? std::abs(d1 - s1) - std::abs(d1) : std::abs(d2 - s2) - std::abs(d2));
+    d0 -= x ? s0 : 0;
+    d1 -= y ? s1 : 0;
+    d2 -= z ? s2 : 0;
+    t0 += x ? dt0 : 0.0;
+    t1 += y ? dt1 : 0.0;
+    t2 += z ? dt2 : 0.0;
+    status_i += x ? ds0 : (y ? ds1 : ds2);
+    seen_i += x ? de0 : (y ? de1 : de2);
   }
   gain += added;
   stats_.voxels_visited += visited;

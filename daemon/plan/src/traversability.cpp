@@ -293,13 +293,33 @@ void TraversabilityGrid::recompute(KeyBox region) {
       }
     }
   }
-  for (int y = region.min.y(); y <= region.max.y(); ++y)
-    for (int x = region.min.x(); x <= region.max.x(); ++x) {
-      windowOr(
-          region.min.z(), region.max.z(), r_.z(),
-          [&](int z) -> int { return z < b.min.z() || z > b.max.z() ? 1 : oy.v[oy.index(x, y, z)]; },
-          [&](int z, bool v) { safe_[indexOf(VoxelKey(x, y, z))] = v ? 0 : 1; });
+  // The vertical pass, a layer at a time (rows stay contiguous in memory; a column-wise window would
+  // stride through the whole volume): per (x, y), the number of blocked layers in [z - r_z, z + r_z].
+  const int wx = region.max.x() - region.min.x() + 1;
+  std::vector<int> blocked_layers(static_cast<std::size_t>(wx) *
+                                  static_cast<std::size_t>(region.max.y() - region.min.y() + 1));
+  auto addLayer = [&](int z, int sign) {
+    int* count = blocked_layers.data();
+    for (int y = region.min.y(); y <= region.max.y(); ++y, count += wx) {
+      if (z < b.min.z() || z > b.max.z()) {  // outside the grid: blocked
+        for (int i = 0; i < wx; ++i) count[i] += sign;
+        continue;
+      }
+      const std::uint8_t* row = oy.v.data() + oy.index(region.min.x(), y, z);
+      for (int i = 0; i < wx; ++i) count[i] += sign * row[i];
     }
+  };
+  for (int z = region.min.z() - r_.z(); z <= region.min.z() + r_.z(); ++z) addLayer(z, 1);
+  for (int z = region.min.z(); z <= region.max.z(); ++z) {
+    const int* count = blocked_layers.data();
+    for (int y = region.min.y(); y <= region.max.y(); ++y, count += wx) {
+      std::uint8_t* safe = safe_.data() + indexOf(VoxelKey(region.min.x(), y, z));
+      for (int i = 0; i < wx; ++i) safe[i] = count[i] == 0 ? 1 : 0;
+    }
+    if (z == region.max.z()) break;
+    addLayer(z + r_.z() + 1, 1);
+    addLayer(z - r_.z(), -1);
+  }
 }
 
 Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) {
