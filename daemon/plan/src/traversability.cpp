@@ -145,6 +145,7 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
     sphere.min = map::pointToKey(assumed_free.centre_world - r, g.inv_resolution_);
     sphere.max = map::pointToKey(assumed_free.centre_world + r, g.inv_resolution_);
     sphere = intersect(sphere, g.grid_);
+    g.assumed_free_keys_ = sphere;
     VoxelKey k;
     if (!sphere.empty())
       for (k.z() = sphere.min.z(); k.z() <= sphere.max.z(); ++k.z())

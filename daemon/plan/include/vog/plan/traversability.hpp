@@ -128,7 +128,7 @@ class TraversabilityGrid {
 
  private:
   bool assumedFree(const map::VoxelKey& k) const {
-    return assumed_free_.radius_m > 0.0 &&
+    return assumed_free_keys_.contains(k) &&
            (map::keyToCentre(k, resolution_) - assumed_free_.centre_world).norm() <= assumed_free_.radius_m;
   }
   TraversabilityGrid() = default;
@@ -149,6 +149,7 @@ class TraversabilityGrid {
 
   double resolution_ = 0.0;
   AssumedFree assumed_free_;
+  map::KeyBox assumed_free_keys_;  // the keys of the sphere's bounding box in the grid; empty for radius 0
   double inv_resolution_ = 0.0;
   map::LogOddsBounds bounds_;
   Eigen::AlignedBox3d box_world_;
