@@ -375,8 +375,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   const vog::bench::Stopwatch total;
 
   // Ground truth for coverage: surface points observable from a collision-free position in the box.
-  sim::ObservableConfig oc;
-  oc.max_range_m = sensor_range_m;
+  vog::geometry::SonarFan observing_fan;
+  observing_fan.max_range_m = sensor_range_m;
+  const sim::ObservableConfig oc = sim::ObservableConfig::ofFan(observing_fan);
   vog::geometry::PointCloud surface;
   std::optional<sim::ObservableResult> observable;
   if (evaluate) {

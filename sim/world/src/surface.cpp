@@ -64,9 +64,32 @@ geometry::PointCloud World::sampleSurface(double spacing_m, std::uint64_t seed) 
   return cloud;
 }
 
+ObservableConfig ObservableConfig::ofFan(const geometry::SonarFan& fan) {
+  ObservableConfig c;
+  c.max_range_m = fan.max_range_m;
+  c.min_range_m = fan.min_range_m;
+  c.min_elevation_rad = std::numbers::pi / 2;
+  c.max_elevation_rad = -std::numbers::pi / 2;
+  // Along the fan's arc at its beams' edges (the arc's elevation may peak between its ends).
+  for (int i = 0; i <= fan.n_beams; ++i) {
+    const double azimuth = -0.5 * fan.fov_rad + fan.fov_rad * static_cast<double>(i) / fan.n_beams;
+    const Eigen::Vector3d d =
+        fan.T_vehicle_sensor.linear() * Eigen::Vector3d(std::cos(azimuth), std::sin(azimuth), 0.0);
+    const double elevation = std::asin(std::clamp(d.z() / d.norm(), -1.0, 1.0));
+    c.min_elevation_rad = std::min(c.min_elevation_rad, elevation);
+    c.max_elevation_rad = std::max(c.max_elevation_rad, elevation);
+  }
+  return c;
+}
+
 Status ObservableConfig::validate() const {
   if (!(max_range_m > 0.0) || !std::isfinite(max_range_m))
     return Error{"observable.max_range_m must be finite and > 0, got " + std::to_string(max_range_m)};
+  if (!(min_range_m >= 0.0) || !(min_range_m < max_range_m))
+    return Error{"observable.min_range_m must be >= 0 and below max_range_m, got " + std::to_string(min_range_m)};
+  if (!(min_elevation_rad >= -std::numbers::pi / 2) || !(max_elevation_rad <= std::numbers::pi / 2) ||
+      !(min_elevation_rad <= max_elevation_rad))
+    return Error{"observable: the elevations must satisfy -pi/2 <= min_elevation_rad <= max_elevation_rad <= pi/2"};
   if (!(collision_box_m.minCoeff() > 0.0) || !collision_box_m.allFinite())
     return Error{"observable.collision_box_m must be finite and > 0 on every axis"};
   if (!(viewpoint_spacing_m >= 0.05) || !std::isfinite(viewpoint_spacing_m))
@@ -139,7 +162,11 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
       if ((c.array() < 0).any() || (c.array() >= dims.array()).any()) continue;
       if (free_vp[vpIndex(c.x(), c.y(), c.z())] == 0) continue;
       const Eigen::Vector3d vp = vpPos(c.x(), c.y(), c.z());
-      if ((vp - p).norm() > config.max_range_m) continue;
+      const Eigen::Vector3d ray = p - vp;
+      const double range = ray.norm();
+      if (range > config.max_range_m || range < config.min_range_m) continue;
+      const double elevation = std::asin(ray.z() / range);
+      if (!(elevation >= config.min_elevation_rad && elevation <= config.max_elevation_rad)) continue;  // NaN: out
       if (!world.segmentBlocked(vp, p)) {
         seen = true;
         break;

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
+
 #include <fstream>
 #include <random>
 
@@ -273,6 +275,8 @@ TEST(WorldObservable, MaxRangeLimitsVisibility) {
   geometry::PointCloud pts;
   pts.points = {{0, 0, -10}};
   ObservableConfig cfg;
+  cfg.min_elevation_rad = -std::numbers::pi / 2;  // straight down, from any range: this test is about the maximum
+  cfg.min_range_m = 0.0;
   cfg.max_range_m = 0.5;  // nearest viewpoint centre is 0.25 + margin above: collision box forbids it
   auto near = observablePoints(*w, pts, cfg);
   ASSERT_TRUE(near.ok());
@@ -283,6 +287,51 @@ TEST(WorldObservable, MaxRangeLimitsVisibility) {
   EXPECT_EQ(far->points.size(), 1u);
   cfg.viewpoint_spacing_m = 0.0;
   EXPECT_FALSE(observablePoints(*w, pts, cfg).ok());
+}
+
+TEST(WorldObservable, TheFanSeesOnlyTheElevationsOfItsBeams) {
+  // The defaults are the thesis's vertical fan: 29 deg wide, so +-14.5 deg about the horizontal.
+  const ObservableConfig defaults;
+  const ObservableConfig thesis = ObservableConfig::ofFan(geometry::SonarFan{});
+  EXPECT_NEAR(thesis.min_elevation_rad, defaults.min_elevation_rad, 1e-12);
+  EXPECT_NEAR(thesis.max_elevation_rad, defaults.max_elevation_rad, 1e-12);
+  EXPECT_NEAR(defaults.max_elevation_rad, geometry::deg2rad(14.5), 1e-12);
+  EXPECT_EQ(thesis.max_range_m, defaults.max_range_m);
+  EXPECT_EQ(thesis.min_range_m, defaults.min_range_m);
+  // A shaft 1 m wide down to the seabed: every position in it is right above the seabed point, so
+  // the level vertical fan never points at it; a fan pitched 60 deg down does, and so would a
+  // line of sight in any direction.
+  const auto w = worldFrom("  - {type: plane, pose: {xyz: [0, 0, -4]}, size: [16, 16]}\n",
+                           "{min: [-0.5, -0.5, -4], max: [0.5, 0.5, 0]}");
+  geometry::PointCloud pts;
+  pts.points = {{0, 0, -4}};
+  auto level = observablePoints(*w, pts, thesis);
+  ASSERT_TRUE(level.ok()) << level.error().message;
+  EXPECT_GT(level->n_viewpoints, 0u);
+  EXPECT_TRUE(level->points.empty());
+  geometry::SonarFan pitched;
+  pitched.T_vehicle_sensor =
+      geometry::poseFromXyzRpy(0, 0, 0, 0, geometry::deg2rad(60.0), 0) * pitched.T_vehicle_sensor;
+  const ObservableConfig down = ObservableConfig::ofFan(pitched);
+  EXPECT_NEAR(down.min_elevation_rad, geometry::deg2rad(-74.5), 1e-9);
+  EXPECT_NEAR(down.max_elevation_rad, geometry::deg2rad(-45.5), 1e-9);
+  auto seen = observablePoints(*w, pts, down);
+  ASSERT_TRUE(seen.ok()) << seen.error().message;
+  EXPECT_EQ(seen->points.size(), 1u);
+  ObservableConfig any = thesis;
+  any.min_elevation_rad = -std::numbers::pi / 2;
+  any.max_elevation_rad = std::numbers::pi / 2;
+  EXPECT_EQ(observablePoints(*w, pts, any)->points.size(), 1u);
+  // Bad elevations and ranges are refused, naming the field.
+  ObservableConfig bad = thesis;
+  bad.min_elevation_rad = 0.5;
+  bad.max_elevation_rad = 0.2;
+  ASSERT_FALSE(bad.validate().ok());
+  EXPECT_NE(bad.validate().error().message.find("elevation"), std::string::npos);
+  bad = thesis;
+  bad.min_range_m = 20.0;
+  ASSERT_FALSE(bad.validate().ok());
+  EXPECT_NE(bad.validate().error().message.find("min_range_m"), std::string::npos);
 }
 
 }  // namespace

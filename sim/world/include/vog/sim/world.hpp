@@ -9,6 +9,7 @@
 
 #include "vog/geometry/point_cloud.hpp"
 #include "vog/geometry/pose.hpp"
+#include "vog/geometry/sonar.hpp"
 #include "vog/core/result.hpp"
 #include "vog/sim/scene.hpp"
 
@@ -86,14 +87,26 @@ class World {
   std::unique_ptr<Impl> impl_;
 };
 
-// Observable ground truth: the surface points inside the exploration box that have an
-// unobstructed line of sight no longer than `max_range_m` from at least one collision-free vehicle
-// position inside the box. Candidate positions are a regular grid over the box.
+// Observable ground truth: the surface points inside the exploration box that the sonar can see
+// from at least one collision-free vehicle position inside the box: an unobstructed line of sight
+// between min_range_m and max_range_m whose elevation (angle above the horizontal) lies in
+// [min_elevation_rad, max_elevation_rad]. The vehicle stays level and may turn to any heading, so a
+// fan mounted on it can point at exactly the directions whose elevation one of its beams has: for
+// the vertical fan +-fov/2 about the horizontal, so the seabed right below the vehicle is never in
+// view (it is seen farther off, at a grazing angle). Candidate positions are a regular grid over
+// the box.
 struct ObservableConfig {
-  double max_range_m = 11.0;                       // thesis Table 4.2, sensor d_max
+  double max_range_m = 11.0;  // thesis Table 4.2, sensor d_max
+  double min_range_m = 0.5;   // the fan's window start (geometry::SonarFan)
+  // The thesis's vertical fan (29 deg, level): ofFan(geometry::SonarFan{}) gives these.
+  double min_elevation_rad = -0.2530727415391778;  // -14.5 deg
+  double max_elevation_rad = 0.2530727415391778;
   Eigen::Vector3d collision_box_m{1.0, 1.0, 0.5};  // thesis Table 4.2
   double viewpoint_spacing_m = 0.5;
 
+  // The ranges of `fan` and the elevations its arc spans (beam edges), mounted on a level vehicle
+  // (other fields: defaults).
+  static ObservableConfig ofFan(const geometry::SonarFan& fan);
   Status validate() const;
 };
 
