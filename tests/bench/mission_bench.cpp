@@ -75,7 +75,6 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -480,8 +479,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   double mapping_s_open = 0.0, mapping_cpu_s_open = 0.0;  // feed() time since the last closed submap
   // Per closed submap, where process() spent it (graph, search, optimize, commit) and the rest of
   // feed() (building the submap from its scans).
-  std::array<std::vector<double>, 5> mapping_phase_ms;
-  bool series_row_due = false;  // a multiple of --report-every submaps was just closed
+  std::map<std::string, std::vector<double>> mapping_phase_ms;  // phase name -> ms per closed submap
+  bool series_row_due = false;                                  // a multiple of --report-every submaps was just closed
   ScanQueue queue;
   queue.record_truth = evaluate;
   auto simS = [&] { return 1e-9 * static_cast<double>(simulation.stampNs()); };
@@ -564,12 +563,12 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         mapping_ms_per_submap.push_back(1e3 * mapping_s_open);
         const slam::MappingPhaseTimes& t = u->phase_times;
         const double process_ms = t.graph_ms + t.search_ms + t.optimize_ms + t.commit_ms;
-        for (const auto& [k, ms] : {std::pair{0, t.graph_ms},
-                                    {1, t.search_ms},
-                                    {2, t.optimize_ms},
-                                    {3, t.commit_ms},
-                                    {4, 1e3 * mapping_s_open - process_ms}})
-          mapping_phase_ms[static_cast<std::size_t>(k)].push_back(ms);
+        for (const auto& [name, ms] : {std::pair{"graph", t.graph_ms},
+                                       {"search", t.search_ms},
+                                       {"optimize", t.optimize_ms},
+                                       {"commit", t.commit_ms},
+                                       {"build", 1e3 * mapping_s_open - process_ms}})
+          mapping_phase_ms[name].push_back(ms);
         mapping_cpu_ms_per_submap.push_back(1e3 * mapping_cpu_s_open);
         mapping_s_open = mapping_cpu_s_open = 0.0;
         if (report_every > 0 && pipeline.submaps().size() % static_cast<std::size_t>(report_every) == 0)
@@ -681,10 +680,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     row.add("mapping_ms_median", vog::bench::median(mapping_ms));
     row.add("mapping_ms_max", vog::bench::percentile(mapping_ms, 1.0));
     row.add("mapping_cpu_ms_median", vog::bench::median(mapping_cpu_ms));
-    const char* phase_names[] = {"graph", "search", "optimize", "commit", "build"};
-    for (std::size_t k = 0; k < mapping_phase_ms.size(); ++k)
-      row.add(std::string("mapping_") + phase_names[k] + "_ms_median",
-              vog::bench::median(since(mapping_phase_ms[k], mark.mapping)));
+    for (const auto& [name, ms] : mapping_phase_ms)
+      row.add("mapping_" + name + "_ms_median", vog::bench::median(since(ms, mark.mapping)));
     row.add("optimizations", static_cast<std::int64_t>(optimize_ms.size()));
     row.add("optimize_ms_median", vog::bench::median(optimize_ms));
     row.add("optimize_ms_max", vog::bench::percentile(optimize_ms, 1.0));
