@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace vog::sim {
@@ -128,8 +129,40 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
           if (ok) break;
         }
         free_vp[vpIndex(x, y, z)] = ok ? 1 : 0;
-        n_free += ok ? 1 : 0;
       }
+
+  // Only positions the vehicle can reach from its start count (a seabed sheet across the box leaves
+  // free positions under it, from where the seabed would be seen from below): breadth first from the
+  // free position nearest the start, to the six neighbours whose centres a clear straight line joins.
+  std::vector<Eigen::Vector3i> queue;
+  {
+    const Eigen::Vector3d start = world.scene().T_world_start.translation();
+    double best = std::numeric_limits<double>::infinity();
+    for (int z = 0; z < dims.z(); ++z)
+      for (int y = 0; y < dims.y(); ++y)
+        for (int x = 0; x < dims.x(); ++x)
+          if (free_vp[vpIndex(x, y, z)] != 0 && (vpPos(x, y, z) - start).norm() < best) {
+            best = (vpPos(x, y, z) - start).norm();
+            queue.assign(1, Eigen::Vector3i(x, y, z));
+          }
+  }
+  constexpr char kReached = 2;
+  for (const Eigen::Vector3i& c : queue) free_vp[vpIndex(c.x(), c.y(), c.z())] = kReached;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const Eigen::Vector3i c = queue[head];
+    for (int axis = 0; axis < 3; ++axis)
+      for (const int d : {-1, 1}) {
+        Eigen::Vector3i n = c;
+        n[axis] += d;
+        if (n[axis] < 0 || n[axis] >= dims[axis]) continue;
+        char& state = free_vp[vpIndex(n.x(), n.y(), n.z())];
+        if (state != 1 || world.segmentBlocked(vpPos(c.x(), c.y(), c.z()), vpPos(n.x(), n.y(), n.z()), 0.0)) continue;
+        state = kReached;
+        queue.push_back(n);
+      }
+  }
+  n_free = queue.size();
+  for (char& state : free_vp) state = state == kReached ? 1 : 0;
 
   // Cell offsets sorted by length: nearest viewpoints are tried first, so a visible point usually
   // stops after a few rays.

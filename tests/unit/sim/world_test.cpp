@@ -289,6 +289,36 @@ TEST(WorldObservable, MaxRangeLimitsVisibility) {
   EXPECT_FALSE(observablePoints(*w, pts, cfg).ok());
 }
 
+TEST(WorldObservable, OnlyPositionsReachableFromTheStartCount) {
+  // A seabed across the whole box at z = -2 and a crate under it: the free positions under the
+  // seabed would see the crate, but the vehicle starts above the seabed and cannot get there.
+  const std::string objects =
+      "  - {type: plane, pose: {xyz: [0, 0, -2]}, size: [30, 30]}\n"
+      "  - {type: box, pose: {xyz: [0, 0, -4]}, size: [0.4, 0.4, 0.4]}\n";
+  geometry::PointCloud pts;
+  pts.points = {{0, 0, -3.8}, {1, 1, -2}};
+  auto from = [&](const std::string& start) {
+    const std::string text =
+        "name: t\nbounds: {min: [-3, -3, -5], max: [3, 3, 0]}\nstart: {xyz: " + start + "}\nobjects:\n" + objects;
+    auto scene = parseScene(text, "t.yaml", ".");
+    EXPECT_TRUE(scene.ok()) << scene.error().message;
+    auto world = World::create(*scene);
+    EXPECT_TRUE(world.ok());
+    auto obs = observablePoints(**world, pts, {});
+    EXPECT_TRUE(obs.ok()) << obs.error().message;
+    return std::move(obs).value();
+  };
+  const ObservableResult above = from("[0, 0, -0.5]");
+  ASSERT_EQ(above.points.size(), 1u);
+  EXPECT_EQ(above.points.points[0], Eigen::Vector3d(1, 1, -2));  // the seabed, from above
+  const ObservableResult below = from("[2, 2, -4.5]");
+  EXPECT_EQ(below.points.size(), 2u);  // a vehicle started under the sheet sees the crate (and the sheet)
+  // Neither side reaches across the sheet: together fewer than the 12 x 12 x 10 positions of the box.
+  EXPECT_GT(above.n_viewpoints, 0u);
+  EXPECT_GT(below.n_viewpoints, 0u);
+  EXPECT_LT(above.n_viewpoints + below.n_viewpoints, 12u * 12u * 10u);
+}
+
 TEST(WorldObservable, TheFanSeesOnlyTheElevationsOfItsBeams) {
   // The defaults are the thesis's vertical fan: 29 deg wide, so +-14.5 deg about the horizontal.
   const ObservableConfig defaults;

@@ -88,7 +88,8 @@ class World {
 };
 
 // Observable ground truth: the surface points inside the exploration box that the sonar can see
-// from at least one collision-free vehicle position inside the box: an unobstructed line of sight
+// from at least one collision-free vehicle position inside the box that the vehicle can reach from
+// its start (not, say, under a seabed that spans the box): an unobstructed line of sight
 // between min_range_m and max_range_m whose elevation (angle above the horizontal) lies in
 // [min_elevation_rad, max_elevation_rad]. The vehicle stays level and may turn to any heading, so a
 // fan mounted on it can point at exactly the directions whose elevation one of its beams has: for
@@ -112,7 +113,7 @@ struct ObservableConfig {
 
 struct ObservableResult {
   geometry::PointCloud points;
-  std::size_t n_viewpoints = 0;  // collision-free grid positions used
+  std::size_t n_viewpoints = 0;  // collision-free grid positions reachable from the start, used
 };
 
 Result<ObservableResult> observablePoints(const World& world, const geometry::PointCloud& surface,
