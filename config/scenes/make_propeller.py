@@ -16,8 +16,9 @@ x = s sin(theta); the two faces are offset by +-thickness/2 along the face norma
 Usage: python3 make_propeller.py [out.stl]   (deterministic: same file every run)
 """
 import math
-import struct
 import sys
+
+from stl import write_stl
 
 PITCH_M = 4.0
 HUB_RADIUS_M = 0.5
@@ -81,28 +82,12 @@ def blade(phi0):
     return tris
 
 
-def normal(a, b, c):
-    u = [b[k] - a[k] for k in range(3)]
-    v = [c[k] - a[k] for k in range(3)]
-    n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-    length = math.sqrt(sum(x * x for x in n)) or 1.0
-    return tuple(x / length for x in n)
-
-
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "propeller_blades.stl"
     tris = []
     for deg in BLADE_ANGLES_DEG:
         tris += blade(math.radians(deg))
-    with open(out, "wb") as f:
-        f.write(b"vog propeller blades, metres, x = shaft axis".ljust(80, b" "))
-        f.write(struct.pack("<I", len(tris)))
-        for a, b, c in tris:
-            f.write(struct.pack("<3f", *normal(a, b, c)))
-            for p in (a, b, c):
-                f.write(struct.pack("<3f", *p))
-            f.write(struct.pack("<H", 0))
-    print(f"{out}: {len(tris)} triangles")
+    write_stl(out, b"vog propeller blades, metres, x = shaft axis", tris)
 
 
 if __name__ == "__main__":

@@ -13,8 +13,9 @@ triangles, and the seabed is only ever seen from above.
 Usage: python3 make_terrain.py [out.stl]   (deterministic: same file every run)
 """
 import math
-import struct
 import sys
+
+from stl import write_stl
 
 SIZE_M = 16.0
 STEP_M = 0.25
@@ -43,14 +44,6 @@ def height(x, y):
     return h
 
 
-def normal(a, b, c):
-    u = [b[k] - a[k] for k in range(3)]
-    v = [c[k] - a[k] for k in range(3)]
-    n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-    length = math.sqrt(sum(x * x for x in n)) or 1.0
-    return tuple(x / length for x in n)
-
-
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else "terrain_ground.stl"
     n = int(round(SIZE_M / STEP_M))
@@ -61,15 +54,7 @@ def main():
         for i in range(n):
             a, b, c, d = grid[j][i], grid[j][i + 1], grid[j + 1][i + 1], grid[j + 1][i]
             tris += [(a, b, c), (a, c, d)]  # counter-clockwise seen from above: normals up
-    with open(out, "wb") as f:
-        f.write(b"vog terrain, metres, z up, mean seabed at z = 0".ljust(80, b" "))
-        f.write(struct.pack("<I", len(tris)))
-        for a, b, c in tris:
-            f.write(struct.pack("<3f", *normal(a, b, c)))
-            for p in (a, b, c):
-                f.write(struct.pack("<3f", *p))
-            f.write(struct.pack("<H", 0))
-    print(f"{out}: {len(tris)} triangles")
+    write_stl(out, b"vog terrain, metres, z up, mean seabed at z = 0", tris)
 
 
 if __name__ == "__main__":
