@@ -113,7 +113,6 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
   const Eigen::Vector3d half = 0.5 * config.collision_box_m;
 
   std::vector<char> free_vp(static_cast<std::size_t>(dims.prod()), 0);
-  std::size_t n_free = 0;
   auto vpIndex = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * dims.y() + y) * dims.x() + x; };
   auto vpPos = [&](int x, int y, int z) {
     return Eigen::Vector3d(box.min() + step.cwiseProduct(Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5)));
@@ -161,7 +160,6 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
         queue.push_back(n);
       }
   }
-  n_free = queue.size();
   for (char& state : free_vp) state = state == kReached ? 1 : 0;
 
   // Cell offsets sorted by length: nearest viewpoints are tried first, so a visible point usually
@@ -180,7 +178,7 @@ Result<ObservableResult> observablePoints(const World& world, const geometry::Po
   std::sort(offsets.begin(), offsets.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
 
   ObservableResult result;
-  result.n_viewpoints = n_free;
+  result.n_viewpoints = queue.size();  // the reachable positions
   const double eps = 1e-6;
   const Eigen::AlignedBox3d inside(box.min() - Eigen::Vector3d::Constant(eps),
                                    box.max() + Eigen::Vector3d::Constant(eps));
