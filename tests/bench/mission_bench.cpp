@@ -245,6 +245,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   int submap_budget = 156;  // thesis Table 4.2
   double sensor_range_m = vog::geometry::SonarFan{}.max_range_m;
   double scan_rate_hz = sim::LockstepConfig{}.sonar_rate_hz;
+  double odometry_noise_scale = 0.25;  // the simulated odometry: a quarter of the thesis Eq. 4.1 rates
   double max_sim_s = 7200.0;
   int coverage_every = 10;
   std::string out_dir;
@@ -277,6 +278,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option("--sensor-range", sensor_range_m,
                  "sonar maximum range d_max^sensor, m (thesis Table 4.2: 11; 4.4: 5.63)")
       ->check(CLI::Range(1.0, 50.0));
+  app.add_option("--odometry-noise-scale", odometry_noise_scale,
+                 "factor on the thesis Eq. 4.1 rates of the simulated odometry's random walk")
+      ->check(CLI::Range(0.0, 100.0));
   app.add_option("--scan-rate", scan_rate_hz, "sonar scans per second FPS_sensor (thesis Table 4.2: 5; 4.4: 10)")
       ->check(CLI::Range(0.5, 50.0));
   app.add_option("--planner-range", pc.planner_range_m, "planner: d_max^planner, m (thesis Table 4.2: 5; 4.4: 5.63)");
@@ -297,6 +301,14 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option(
       "--lc-consistency", mc.consistency_confidence,
       "loop closures: confidence of the consistency check before insertion (0: off, the default; 0.999 measured)");
+  app.add_option("--lc-recheck", mc.consistency_recheck,
+                 "loop closures: check every accepted closure again after each solve, switching the inconsistent "
+                 "off (1/0; needs --lc-consistency)");
+  app.add_option_function<double>(
+      "--lc-max-normal-angle-deg",
+      [&](double deg) { mc.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
+      "loop closures: largest angle between corresponding points' normals, deg (180: no check, the default; 45 "
+      "measured)");
   app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
                  "loop closures: share of the source cloud with a correspondence at the result");
   app.add_option_function<double>(
@@ -386,16 +398,16 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     observable = std::move(o).value();
   }
 
-  // Simulation: thesis Eq. 4.1 rates as a random walk at a quarter of them (as vog-bench slam).
+  // Simulation: thesis Eq. 4.1 rates as a random walk, by default at a quarter of them (as vog-bench slam).
   sim::LockstepConfig sc;
   sc.seed = seed;
   sc.frame_every = 0;
   sc.sonar_rate_hz = scan_rate_hz;
   sc.sonar.fan.max_range_m = sensor_range_m;
   sc.odometry.profile = sim::OdometryNoiseProfile::kRandomWalk;
-  sc.odometry.sigma2_x_m2ps *= 0.25;
-  sc.odometry.sigma2_y_m2ps *= 0.25;
-  sc.odometry.sigma2_yaw_rad2ps *= 0.25;
+  sc.odometry.sigma2_x_m2ps *= odometry_noise_scale;
+  sc.odometry.sigma2_y_m2ps *= odometry_noise_scale;
+  sc.odometry.sigma2_yaw_rad2ps *= odometry_noise_scale;
   sc.odometry.world_frame_xy_noise = true;
   auto sim_r = sim::LockstepSimulation::create(world, sc);
   if (!sim_r) return fail(sim_r.error().message);
@@ -859,7 +871,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     double from_true_yaw_rad;   // the older submap's true heading in the world
   };
   std::vector<ClosureRow> closure_rows;
-  std::int64_t closures_wrong = 0;
+  std::int64_t closures_wrong = 0;               // of the closures switched on at the end
+  std::int64_t closures_switched_off_wrong = 0;  // of those switched off (consistency re-check)
   std::optional<double> rmse, rmse_unaligned, rmse_same_run_odometry, rmse_same_run_global_tree, coverage,
       coverage_unaligned;
   std::vector<Eigen::Vector3d> observable_in_map;
@@ -909,7 +922,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       };
       const Pose3 T_true = trueBase(lc.from).inverse() * trueBase(lc.to);
       const vog::eval::ClosureError e = vog::eval::closureError(lc, T_true);
-      closures_wrong += e.wrong ? 1 : 0;
+      (lc.active ? closures_wrong : closures_switched_off_wrong) += e.wrong ? 1 : 0;
       closure_rows.push_back({&lc, e, (lc.T_from_to.translation() - lc.T_from_to_prior.translation()).norm(),
                               slam::xyzRpyDifference(slam::toXyzRpy(lc.T_from_to), slam::toXyzRpy(T_true)),
                               geometry::yawOf(trueBase(lc.from).linear())});
@@ -957,7 +970,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       // directions: the factor's rows over (x, y, yaw), '|' between rows; dx, dy, dyaw: the whole
       // registration's difference from the truth, asserted or not.
       cl << "from,to,rank,fitness_m2,correction_m,error_m,error_deg,wrong,directions,dx_m,dy_m,dyaw_deg,from_true_yaw_"
-            "deg\n";
+            "deg,active\n";
       for (const ClosureRow& r : closure_rows) {
         cl << r.closure->from << ',' << r.closure->to << ',' << r.closure->factor.rank() << ','
            << r.closure->icp.fitness_m2 << ',' << r.correction_m << ',' << r.error.translation_m << ','
@@ -969,7 +982,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
         }
         cl << ',' << r.difference(slam::kX) << ',' << r.difference(slam::kY) << ','
            << r.difference(slam::kYaw) * 180.0 / std::numbers::pi << ','
-           << r.from_true_yaw_rad * 180.0 / std::numbers::pi << '\n';
+           << r.from_true_yaw_rad * 180.0 / std::numbers::pi << ',' << (r.closure->active ? 1 : 0) << '\n';
       }
     }
     std::ofstream mg(std::filesystem::path(out_dir) / "merges.csv");
@@ -1007,7 +1020,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   if (rmse_same_run_global_tree) out.add("rmse_same_run_global_tree", *rmse_same_run_global_tree);
   out.add("path_m", path_m);
   out.add("n_submaps", static_cast<std::int64_t>(nSubmaps()));
-  out.add("closures", static_cast<std::int64_t>(pipeline.closures().size()));
+  const auto active_closures = std::count_if(pipeline.closures().begin(), pipeline.closures().end(),
+                                             [](const slam::LoopClosure& c) { return c.active; });
+  out.add("closures", static_cast<std::int64_t>(active_closures));
+  out.add("closures_switched_off", static_cast<std::int64_t>(pipeline.closures().size()) - active_closures);
   // Submap base poses against the truth (no alignment: both start at the true pose), final
   // estimates and raw odometry.
   {
@@ -1027,7 +1043,10 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   }
   // Loop-closure attempts and why the others were rejected (the reasons of LoopCloser).
   const slam::LoopCloseStats& lc = pipeline.loopStats();
-  if (evaluate) out.add("closures_wrong", closures_wrong);
+  if (evaluate) {
+    out.add("closures_wrong", closures_wrong);
+    out.add("closures_switched_off_wrong", closures_switched_off_wrong);
+  }
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
   out.add("closures_skipped_budget", static_cast<std::int64_t>(lc.skipped_budget));

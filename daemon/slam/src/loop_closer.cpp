@@ -85,6 +85,8 @@ void LoopCloseStats::add(const LoopCloseStats& other) {
   skipped_heading += other.skipped_heading;
   skipped_budget += other.skipped_budget;
   ambiguous_directions += other.ambiguous_directions;
+  switched_off += other.switched_off;
+  switched_on += other.switched_on;
   for (const auto& [k, n] : other.rejected_by_reason) rejected_by_reason[k] += n;
 }
 
@@ -132,7 +134,43 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
   }
   auto partners = findLoopCandidatesOf(footprints, newest, config_.candidates);
   if (!partners) return Error{"loop closer: " + partners.error().message};
+  return registerCandidates(submaps, newest, partners.value(),
+                            [&footprints](std::size_t k) -> const SubmapFootprint& { return footprints[k]; });
+}
 
+Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& submaps, const CandidateIndex& index,
+                                                const SubmapFootprint& newest) const {
+  if (submaps.empty() || index.size() + 1 != submaps.size()) {
+    return Error{"loop closer: " + std::to_string(index.size()) + " indexed footprints for " +
+                 std::to_string(submaps.size()) + " submaps (the newest last, not indexed)"};
+  }
+  const std::size_t last = submaps.size() - 1;
+  if (newest.index != submaps[last].index) {
+    return Error{"loop closer: footprint " + std::to_string(newest.index) + " given for the newest submap " +
+                 std::to_string(submaps[last].index)};
+  }
+  auto partners = index.candidatesOf(newest);
+  if (!partners) return Error{"loop closer: " + partners.error().message};
+  std::vector<std::size_t> checked = partners.value();
+  checked.push_back(last);
+  for (const std::size_t k : checked) {
+    const LoopSubmap& s = submaps[k];
+    if (!s.grid || !s.grid->finalized()) {
+      return Error{"loop closer: submap " + std::to_string(s.index) + " has no finalized grid"};
+    }
+    if (k != last && index.footprints()[k].index != s.index) {
+      return Error{"loop closer: footprint " + std::to_string(index.footprints()[k].index) +
+                   " at the position of submap " + std::to_string(s.index)};
+    }
+  }
+  return registerCandidates(submaps, last, partners.value(), [&](std::size_t k) -> const SubmapFootprint& {
+    return k == last ? newest : index.footprints()[k];
+  });
+}
+
+LoopCloseOutcome LoopCloser::registerCandidates(
+    const std::vector<LoopSubmap>& submaps, std::size_t newest, const std::vector<std::size_t>& partners,
+    const std::function<const SubmapFootprint&(std::size_t)>& footprint) const {
   // The point-to-point mode's fitness and overlap are measured differently and have their own bounds.
   const bool p2p = config_.mode == LoopClosureMode::kPointToPoint2d;
   IcpAcceptanceConfig bounds = config_.acceptance;
@@ -142,7 +180,7 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
   LoopCloseOutcome out;
   const LoopSubmap& source = submaps[newest];
   std::vector<std::size_t> gated;
-  for (const std::size_t k : partners.value()) {
+  for (const std::size_t k : partners) {
     const double dyaw = geometry::wrapAngle(geometry::yawOf(source.T_world_submap.linear()) -
                                             geometry::yawOf(submaps[k].T_world_submap.linear()));
     if (std::abs(dyaw) > config_.max_heading_difference_rad) {
@@ -154,7 +192,10 @@ Result<LoopCloseOutcome> LoopCloser::closeLoops(const std::vector<LoopSubmap>& s
   const auto budget = static_cast<std::size_t>(config_.max_registrations);
   if (budget > 0 && gated.size() > budget) {
     // The nearest by the clouds' centroids at the current estimates, ties by position (deterministic).
-    const auto centroid = [&](std::size_t k) { return footprints[k].T_world_submap * footprints[k].centroid_submap; };
+    const auto centroid = [&](std::size_t k) {
+      const SubmapFootprint& f = footprint(k);
+      return f.T_world_submap * f.centroid_submap;
+    };
     const Eigen::Vector3d c = centroid(newest);
     std::vector<std::pair<double, std::size_t>> by_distance;
     for (const std::size_t k : gated) by_distance.emplace_back((centroid(k) - c).squaredNorm(), k);

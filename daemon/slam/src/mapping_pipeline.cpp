@@ -41,6 +41,12 @@ Status MappingPipelineConfig::validate() const {
        << " and consistency_floor_rad = " << consistency_floor_rad << " must be finite and >= 0";
     return Error{os.str()};
   }
+  if (consistency_recheck && !(consistency_confidence > 0.0)) {
+    return Error{"mapping config: consistency_recheck needs consistency_confidence > 0"};
+  }
+  if (recheck_max_solves < 1) {
+    return Error{"mapping config: recheck_max_solves = " + std::to_string(recheck_max_solves) + " must be >= 1"};
+  }
   if (local_optimization_nodes < 0 || full_optimization_every < 1) {
     std::ostringstream os;
     os << "mapping config: local_optimization_nodes = " << local_optimization_nodes
@@ -83,16 +89,25 @@ double chiSquareQuantile(int k, double p) {
   return 0.5 * (lo + hi);
 }
 
+namespace {
+
+// The chi-square quantiles at confidence p by rank 1..6 (index 0 unused); zeros when p is 0 (no check).
+std::array<double, 7> quantilesByRank(double p) {
+  std::array<double, 7> quantile{};
+  if (p > 0.0) {
+    for (int k = 1; k <= 6; ++k) quantile[static_cast<std::size_t>(k)] = chiSquareQuantile(k, p);
+  }
+  return quantile;
+}
+
+}  // namespace
+
 Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
                                              const std::vector<LoopClosure>& closures, NodeId newest,
                                              const MappingPipelineConfig& config) {
   ConsistentOptimum out{without_closures, std::vector<bool>(closures.size(), false), std::nullopt};
   const auto left = [&] { return std::find(out.refused.begin(), out.refused.end(), false) != out.refused.end(); };
-  std::array<double, 7> quantile{};  // by rank 1..6, computed once per call
-  if (config.consistency_confidence > 0.0) {
-    for (int k = 1; k <= 6; ++k)
-      quantile[static_cast<std::size_t>(k)] = chiSquareQuantile(k, config.consistency_confidence);
-  }
+  const std::array<double, 7> quantile = quantilesByRank(config.consistency_confidence);
   const bool bounded = !config.optimize_closed_loop_only && config.local_optimization_nodes > 0 &&
                        without_closures.numNodes() > static_cast<std::size_t>(config.local_optimization_nodes);
   const bool full_due = bounded && newest % static_cast<NodeId>(config.full_optimization_every) == 0;
@@ -150,6 +165,49 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
   return out;
 }
 
+Status recheckClosures(PoseGraph& graph, const std::vector<const LoopClosure*>& closures, std::vector<bool>& active,
+                       const MappingPipelineConfig& config, std::vector<std::pair<NodeId, NodeId>>& switched_off,
+                       std::vector<std::pair<NodeId, NodeId>>& switched_on) {
+  if (active.size() != closures.size()) {
+    return Error{"consistency re-check: " + std::to_string(active.size()) + " switches for " +
+                 std::to_string(closures.size()) + " closures"};
+  }
+  if (config.consistency_confidence <= 0.0) return Status::success();
+  const std::array<double, 7> quantile = quantilesByRank(config.consistency_confidence);
+  std::vector<bool> off_now(closures.size(), false);  // switched off in this re-check: not back on in it
+  for (int solves = 0; solves < config.recheck_max_solves; ++solves) {
+    // The least consistent active closure, and the most consistent inactive one.
+    std::optional<std::size_t> worst, best;
+    double worst_ratio = 1.0, best_ratio = 1.0;
+    for (std::size_t k = 0; k < closures.size(); ++k) {
+      const LoopClosure& c = *closures[k];
+      auto from = graph.pose(c.from);
+      if (!from) return from.error();
+      auto to = graph.pose(c.to);
+      if (!to) return to.error();
+      const double ratio =
+          closureConsistencyChi2(c.factor, *from, *to, config.consistency_floor_m, config.consistency_floor_rad) /
+          quantile[static_cast<std::size_t>(c.factor.rank())];
+      if (active[k] && ratio > worst_ratio) {
+        worst_ratio = ratio;
+        worst = k;
+      } else if (!active[k] && !off_now[k] && ratio <= best_ratio) {
+        best_ratio = ratio;
+        best = k;
+      }
+    }
+    const std::optional<std::size_t> flip = worst ? worst : best;
+    if (!flip) break;
+    const LoopClosure& c = *closures[*flip];
+    active[*flip] = !active[*flip];
+    if (Status s = graph.setLoopClosureActive(c.from, c.to, active[*flip]); !s.ok()) return s;
+    (active[*flip] ? switched_on : switched_off).emplace_back(c.from, c.to);
+    off_now[*flip] = !active[*flip];
+    if (auto r = graph.optimize(); !r) return r.error();
+  }
+  return Status::success();
+}
+
 Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPipelineConfig& config) {
   if (Status s = config.validate(); !s.ok()) return s.error();
   auto builder = SubmapBuilder::create(config.builder);
@@ -160,8 +218,11 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::create(const MappingPi
   if (!graph) return graph.error();
   auto map = map::VogMap::create(config.builder.grid);
   if (!map) return map.error();
-  return std::unique_ptr<MappingPipeline>(new MappingPipeline(
-      config, std::move(builder.value()), std::move(closer.value()), std::move(graph.value()), std::move(map.value())));
+  auto candidates = CandidateIndex::create(config.loop_closer.candidates);
+  if (!candidates) return candidates.error();
+  return std::unique_ptr<MappingPipeline>(new MappingPipeline(config, std::move(builder.value()),
+                                                              std::move(closer.value()), std::move(graph.value()),
+                                                              std::move(map.value()), std::move(candidates.value())));
 }
 
 Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingPipelineConfig& config,
@@ -236,6 +297,11 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingP
       if (Status s = p.graph_.addPartialLoopClosure(lc.from, lc.to, lc.factor); !s.ok()) {
         return Error{"restore: " + s.error().message};
       }
+      if (!lc.active) {
+        if (Status s = p.graph_.setLoopClosureActive(lc.from, lc.to, false); !s.ok()) {
+          return Error{"restore: " + s.error().message};
+        }
+      }
     }
     auto pose = p.graph_.pose(id);
     if (!pose) return Error{"restore: " + pose.error().message};
@@ -249,7 +315,9 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingP
     record.reason = c.reason;
     p.submaps_.push_back(record);
     p.loop_submaps_.push_back({id, c.grid, pose.value(), c.first_stamp_ns});
-    p.footprints_.push_back(footprintOf(p.loop_submaps_.back()));
+    if (Status s = p.candidates_.add(footprintOf(p.loop_submaps_.back())); !s.ok()) {
+      return Error{"restore: " + s.error().message};
+    }
     poses.push_back(pose.value());
     if (Status s = p.map_->addSubmap(static_cast<map::SubmapId>(id), c.grid, pose.value()); !s.ok()) {
       return Error{"restore: " + s.error().message};
@@ -340,18 +408,14 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   record.reason = closed.reason;
 
   const LoopSubmap fresh{id, closed.grid, T_world_init, closed.first_stamp_ns};
-  const bool grid_ok = closed.grid && closed.grid->finalized();
+  if (!closed.grid || !closed.grid->finalized()) {
+    return Error{"mapping: submap " + std::to_string(id) + " has no finalized grid"};
+  }
+  SubmapFootprint footprint = footprintOf(fresh);
   if (config_.loop_closures) {
-    // The new submap joins the kept lists for the search only; it is committed below.
-    Result<LoopCloseOutcome> outcome = Error{""};
+    // The new submap joins the kept list for the search only; it is committed below.
     loop_submaps_.push_back(fresh);
-    if (grid_ok) {
-      footprints_.push_back(footprintOf(fresh));
-      outcome = closer_.closeLoops(loop_submaps_, footprints_, loop_submaps_.size() - 1);
-      footprints_.pop_back();
-    } else {
-      outcome = closer_.closeLoops(loop_submaps_, loop_submaps_.size() - 1);  // names the bad grid
-    }
+    Result<LoopCloseOutcome> outcome = closer_.closeLoops(loop_submaps_, candidates_, footprint);
     loop_submaps_.pop_back();
     if (!outcome) return Error{"mapping: " + outcome.error().message};
     update.closures = std::move(outcome->closures);
@@ -379,6 +443,24 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     }
     update.closures = std::move(kept);
   }
+  std::vector<bool> active;  // of closures_ then update.closures, after the re-check
+  if (config_.consistency_recheck && update.optimized) {
+    std::vector<const LoopClosure*> all;
+    all.reserve(closures_.size() + update.closures.size());
+    for (const LoopClosure& c : closures_) {
+      all.push_back(&c);
+      active.push_back(c.active);
+    }
+    for (const LoopClosure& c : update.closures) {
+      all.push_back(&c);
+      active.push_back(true);
+    }
+    if (Status s = recheckClosures(graph, all, active, config_, update.switched_off, update.switched_on); !s.ok()) {
+      return Error{"mapping: " + s.error().message};
+    }
+    update.loop_stats.switched_off = static_cast<int>(update.switched_off.size());
+    update.loop_stats.switched_on = static_cast<int>(update.switched_on.size());
+  }
   update.phase_times.optimize_ms = lap();
 
   // Without an optimisation the other estimates did not change: their poses are the ones kept.
@@ -397,7 +479,14 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   if (!new_pose) return Error{"mapping: " + new_pose.error().message};
   poses.push_back(new_pose.value());
 
-  // Commit: the map first (the only step that can still fail), then the deformation (Alg. 1).
+  // The candidate index refuses what the graph never gives (a non-finite pose): checked before the commit.
+  footprint.T_world_submap = poses.back();
+  if (Status s = checkFootprint(footprint); !s.ok()) return Error{"mapping: " + s.error().message};
+  for (const geometry::Pose3& T : poses) {
+    if (!geometry::isValidPose(T)) return Error{"mapping: the optimised graph holds a non-finite pose"};
+  }
+
+  // Commit: the map first, then the deformation (Alg. 1).
   if (Status s = map_->addSubmap(static_cast<map::SubmapId>(id), closed.grid, T_world_init); !s.ok()) {
     return Error{"mapping: " + s.error().message};
   }
@@ -408,13 +497,17 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
     update.moved.push_back(static_cast<map::SubmapId>(submaps_[k].index));
     submaps_[k].T_world_base = poses[k];
     loop_submaps_[k].T_world_submap = poses[k];
-    footprints_[k].T_world_submap = poses[k];
+    if (Status s = candidates_.setPose(k, poses[k]); !s.ok()) return Error{"mapping: " + s.error().message};
   }
   record.T_world_base = poses.back();
   submaps_.push_back(record);
   loop_submaps_.push_back({id, closed.grid, poses.back(), closed.first_stamp_ns});
-  footprints_.push_back(footprintOf(loop_submaps_.back()));
+  if (Status s = candidates_.add(footprint); !s.ok()) return Error{"mapping: " + s.error().message};
   graph_ = std::move(graph);
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    LoopClosure& c = k < closures_.size() ? closures_[k] : update.closures[k - closures_.size()];
+    c.active = active[k];
+  }
   for (const LoopClosure& c : update.closures) closures_.push_back(c);
   stats_.add(update.loop_stats);
   update.closed_submap = id;

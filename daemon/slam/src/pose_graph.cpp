@@ -382,6 +382,20 @@ Status PoseGraph::addSe3Factor(NodeId from, NodeId to, const geometry::Pose3& T_
   return Status::success();
 }
 
+Status PoseGraph::setLoopClosureActive(NodeId from, NodeId to, bool active) {
+  std::vector<RelativeFactor*> closures;
+  for (RelativeFactor& f : relative_) {
+    const bool closure = f.kind == RelativeKind::kLoopClosure || f.kind == RelativeKind::kPartialLoopClosure;
+    if (closure && f.from == from && f.to == to) closures.push_back(&f);
+  }
+  if (closures.empty()) {
+    return Error{"pose graph: no loop closure " + std::to_string(from) + " -> " + std::to_string(to) + " to switch " +
+                 (active ? "on" : "off")};
+  }
+  for (RelativeFactor* f : closures) f->active = active;
+  return Status::success();
+}
+
 Status PoseGraph::fixNode(NodeId id) {
   if (nodes_.count(id) == 0) return Error{"pose graph: cannot fix missing node " + std::to_string(id)};
   fixed_.insert(id);
@@ -397,7 +411,7 @@ std::vector<NodeId> PoseGraph::roots() const {
 Result<std::vector<std::pair<NodeId, std::ptrdiff_t>>> PoseGraph::spanningTree() const {
   std::map<NodeId, std::vector<std::size_t>> adjacent;
   for (std::size_t k = 0; k < relative_.size(); ++k) {
-    if (relative_[k].kind == RelativeKind::kPartialLoopClosure) continue;
+    if (relative_[k].kind == RelativeKind::kPartialLoopClosure || !relative_[k].active) continue;
     adjacent[relative_[k].from].push_back(k);
     adjacent[relative_[k].to].push_back(k);
   }
@@ -487,7 +501,7 @@ Status PoseGraph::initializeChordal() {
   };
   std::vector<Planar> planar;
   for (const RelativeFactor& f : relative_) {
-    if (f.kind == RelativeKind::kPartialLoopClosure) continue;
+    if (f.kind == RelativeKind::kPartialLoopClosure || !f.active) continue;
     if (f.kind == RelativeKind::kSe3) {
       std::ostringstream os;
       os << "chordal initialisation: SE3 factor " << f.from << " -> " << f.to
@@ -631,6 +645,7 @@ Result<OptimizeResult> PoseGraph::optimizeNodes(const std::set<NodeId>& free) {
 std::set<NodeId> PoseGraph::neighbourhood(const std::vector<NodeId>& seeds, std::size_t max_nodes) const {
   std::map<NodeId, std::vector<NodeId>> adjacent;
   for (const RelativeFactor& f : relative_) {
+    if (!f.active) continue;
     adjacent[f.from].push_back(f.to);
     adjacent[f.to].push_back(f.from);
   }
@@ -670,7 +685,7 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
   for (const RelativeFactor& f : relative_) {
-    if (!free(f.from) && !free(f.to)) continue;
+    if (!f.active || (!free(f.from) && !free(f.to))) continue;
     joins_held = joins_held || !free(f.from) || !free(f.to);
     ceres::CostFunction* cost = nullptr;
     ceres::LossFunction* loss = nullptr;

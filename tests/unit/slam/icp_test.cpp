@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <random>
 
 namespace vog::slam {
@@ -231,6 +232,62 @@ TEST(DegeneracyAwareIcp, CornerIsFullRankAndRecoversTruth) {
     EXPECT_LT(geometry::rotationAngle(r->T_target_source, kTruth), deg2rad(0.5));
     EXPECT_LT(r->fitness_m2, 0.01);
   }
+}
+
+// Half of a post (vertical cylinder of radius r, centre (cx, cy) in the target frame): the half whose
+// outward normals point towards `towards_x` (-1: the half a sonar on the -x side sees, +1: the other),
+// expressed in the frame T_frame_target.
+PointCloud postHalf(double cx, double cy, double r, double towards_x, const Pose3& T_frame_target, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 0.005);
+  PointCloud cloud;
+  for (double a = -0.5 * std::numbers::pi; a <= 0.5 * std::numbers::pi; a += 0.03) {
+    const Eigen::Vector3d n(towards_x * std::cos(a), std::sin(a), 0.0);
+    for (double z = -3.0; z <= -1.0; z += 0.01) {
+      const Eigen::Vector3d p = Eigen::Vector3d(cx, cy, z) + (r + g(rng)) * n;
+      cloud.points.push_back(T_frame_target * p);
+      cloud.normals.push_back(T_frame_target.linear() * n);
+    }
+  }
+  return cloud;
+}
+
+void append(PointCloud& to, const PointCloud& from) {
+  to.points.insert(to.points.end(), from.points.begin(), from.points.end());
+  to.normals.insert(to.normals.end(), from.normals.begin(), from.normals.end());
+}
+
+// Normals agreement: the target saw a post's near half from -x, the source its far half from +x (densely,
+// as a sonar sees a piling it passes close by), both with a corner that pins the truth. The far half's points lie
+// within the bound of the near half's (2 r apart) and, paired with them, pull the registration by a share of 2 r; their
+// normals point the other way, so with the check they find no partner and the corner alone decides.
+TEST(DegeneracyAwareIcp, NormalsAgreementKeepsTheTwoSidesOfAPostApart) {
+  WallPair w = makeClouds({wallX(), wallY()}, 0.02);
+  append(w.target, postHalf(2.0, 1.0, 0.14, -1.0, Pose3::Identity(), 31));
+  append(w.source, postHalf(2.0, 1.0, 0.14, +1.0, kTruth.inverse(), 32));
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.1;
+  x0(kY) -= 0.1;
+  PointToPlaneConfig any;
+  const auto paired = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), any);
+  ASSERT_TRUE(paired.ok()) << paired.error().message;
+  const double bias = geometry::translationDistance(paired->T_target_source, kTruth);
+  EXPECT_GT(bias, 0.01);
+  PointToPlaneConfig agreeing;
+  agreeing.max_normal_angle_rad = deg2rad(45.0);
+  const auto kept_apart = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), agreeing);
+  ASSERT_TRUE(kept_apart.ok()) << kept_apart.error().message;
+  EXPECT_LT(geometry::translationDistance(kept_apart->T_target_source, kTruth), 0.25 * bias);
+  EXPECT_LT(geometry::rotationAngle(kept_apart->T_target_source, kTruth), deg2rad(0.3));
+
+  // The check needs the source's normals, and an angle in (0, pi].
+  PointCloud bare = w.source;
+  bare.normals.clear();
+  const auto refused = icpPointToPlane(bare, w.target, fromXyzRpy(x0), agreeing);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("source"), std::string::npos) << refused.error().message;
+  agreeing.max_normal_angle_rad = 0.0;
+  EXPECT_FALSE(agreeing.validate().ok());
 }
 
 TEST(DegeneracyAwareIcp, ThreePlaneCornerFullSixDof) {

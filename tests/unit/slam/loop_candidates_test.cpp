@@ -122,6 +122,86 @@ TEST(LoopCandidates, SearchForOneSubmapErrorsLikeAllPairs) {
   EXPECT_NE(r.error().message.find("submap 0"), std::string::npos) << r.error().message;
 }
 
+// The index's candidates of each new submap are findLoopCandidatesOf's over all earlier footprints, in
+// the same order, while the earlier submaps move: by centimetres (inside the margin, as after a solve),
+// by metres and turns (out of their cells), and with a few boxes wider than the cells are worth.
+TEST(CandidateIndex, CandidatesOfEachNewSubmapEqualTheLinearSearchWhileSubmapsMove) {
+  for (std::uint64_t seed : {1u, 2u, 3u, 4u}) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::uniform_int_distribution<std::size_t> points(0, 60);
+    const auto random_footprint = [&](std::int64_t index) {
+      SubmapFootprint f;
+      f.index = index;
+      f.T_world_submap = geometry::poseFromXyzRpy(40.0 * u(rng), 25.0 * u(rng), u(rng), 0.1 * u(rng), 0.1 * u(rng),
+                                                  std::numbers::pi * u(rng));
+      const Eigen::Vector3d lo(-1.0 + 3.0 * u(rng), -4.0 + u(rng), -3.0 + u(rng));
+      const double wide = index % 29 == 7 ? 400.0 : 0.0;  // spans more than kMaxCellsPerAxis cells
+      f.aabb_min_submap = lo;
+      f.aabb_max_submap = lo + Eigen::Vector3d(3.0 + 3.0 * std::abs(u(rng)) + wide, 4.0 + 4.0 * std::abs(u(rng)), 2.0);
+      f.centroid_submap = 0.5 * (f.aabb_min_submap + f.aabb_max_submap) + Eigen::Vector3d(u(rng), u(rng), 0.0);
+      f.n_points = points(rng);
+      return f;
+    };
+    CandidateConfig config;
+    config.min_index_gap = 1 + static_cast<std::int64_t>(seed % 3);
+    config.min_points = 20;
+    auto index = CandidateIndex::create(config, 3.0, 0.5);
+    ASSERT_TRUE(index.ok()) << index.error().message;
+    std::vector<SubmapFootprint> all;
+    std::size_t found = 0, tested_pairs = 0;
+    for (std::int64_t n = 0; n < 300; ++n) {
+      const SubmapFootprint newest = random_footprint(n);
+      std::vector<SubmapFootprint> with_newest = all;
+      with_newest.push_back(newest);
+      const auto expected = findLoopCandidatesOf(with_newest, all.size(), config);
+      ASSERT_TRUE(expected.ok());
+      const auto mine = index->candidatesOf(newest);
+      ASSERT_TRUE(mine.ok()) << mine.error().message;
+      ASSERT_EQ(*mine, *expected) << "seed " << seed << ", submap " << n;
+      found += mine->size();
+      tested_pairs += all.size();
+      ASSERT_TRUE(index->add(newest).ok());
+      all.push_back(newest);
+      // Every pose moves a little (a solve); a few jump.
+      for (std::size_t k = 0; k < all.size(); ++k) {
+        const bool jump = std::uniform_int_distribution<int>(0, 40)(rng) == 0;
+        const geometry::Pose3 delta =
+            jump ? geometry::poseFromXyzRpy(8.0 * u(rng), 8.0 * u(rng), 0, 0, 0, u(rng))
+                 : geometry::poseFromXyzRpy(0.02 * u(rng), 0.02 * u(rng), 0, 0, 0, 0.002 * u(rng));
+        all[k].T_world_submap = delta * all[k].T_world_submap;
+        ASSERT_TRUE(index->setPose(k, all[k].T_world_submap).ok());
+      }
+      ASSERT_EQ(index->footprints().size(), all.size());
+    }
+    EXPECT_GT(found, 50u) << "seed " << seed;                // the gate passes pairs ...
+    EXPECT_LT(found, tested_pairs / 10) << "seed " << seed;  // ... and rejects most
+  }
+}
+
+TEST(CandidateIndex, BadInputNamedAndNothingChanged) {
+  EXPECT_FALSE(CandidateIndex::create(CandidateConfig{}, 0.0, 1.0).ok());
+  EXPECT_FALSE(CandidateIndex::create(CandidateConfig{}, 4.0, 0.0).ok());
+  auto index = CandidateIndex::create(CandidateConfig{});
+  ASSERT_TRUE(index.ok());
+  SubmapFootprint bad = footprint(3, geometry::Pose3::Identity());
+  bad.aabb_min_submap.x() = 9.0;  // min > max
+  const Status s = index->add(bad);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("submap 3"), std::string::npos) << s.error().message;
+  EXPECT_EQ(index->size(), 0u);
+  ASSERT_TRUE(index->add(footprint(0, geometry::Pose3::Identity())).ok());
+  geometry::Pose3 nan = geometry::Pose3::Identity();
+  nan.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(index->setPose(0, nan).ok());
+  EXPECT_TRUE(index->footprints()[0].T_world_submap.isApprox(geometry::Pose3::Identity()));
+  EXPECT_FALSE(index->setPose(1, geometry::Pose3::Identity()).ok());
+  EXPECT_FALSE(index->candidatesOf(bad).ok());
+  const auto near = index->candidatesOf(footprint(2, geometry::poseFromXyzRpy(0.5, 0, 0, 0, 0, 0)));
+  ASSERT_TRUE(near.ok());
+  EXPECT_EQ(*near, std::vector<std::size_t>{0});
+}
+
 TEST(MahalanobisGate, DistanceUnderCovariance) {
   const geometry::Pose3 pred = geometry::poseFromXyzRpy(1, 2, 0, 0, 0, 3.1);
   const geometry::Pose3 reg = geometry::poseFromXyzRpy(1.2, 2, 0.5, 0, 0, -3.1);  // yaw wraps: 0.083 rad apart

@@ -303,6 +303,14 @@ TEST(MappingPipeline, ConfigValidationNamesTheKey) {
   c.full_optimization_every = 0;
   ASSERT_FALSE(c.validate().ok());
   EXPECT_NE(c.validate().error().message.find("full_optimization_every"), std::string::npos);
+  c = {};
+  c.consistency_recheck = true;  // without consistency_confidence
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("consistency_recheck"), std::string::npos);
+  c.consistency_confidence = 0.999;
+  c.recheck_max_solves = 0;
+  ASSERT_FALSE(c.validate().ok());
+  EXPECT_NE(c.validate().error().message.find("recheck_max_solves"), std::string::npos);
   EXPECT_TRUE(parseLoopClosureMode("p2p").ok());
   EXPECT_FALSE(parseLoopClosureMode("p2pl").ok());
 }
@@ -321,37 +329,108 @@ TEST(ClosureConsistency, ChiSquareQuantilesMatchTheTables) {
 }
 
 // Six nodes 1 m apart along x, drifted in y by odometry; three closures to the newest agree with the
-// truth, a fourth is 0.6 m off across the line. With the check, the fourth is refused and the others
-// enter; without it, all four enter and pull the newest node off.
-TEST(ClosureConsistency, AClosureThatDisagreesWithTheOthersIsRefusedBeforeInsertion) {
+// truth, a fourth is 0.6 m off across the line.
+struct ClosureLine {
+  PoseGraph graph;
+  std::vector<LoopClosure> closures;
+  static geometry::Pose3 truth(int k) { return geometry::poseFromXyzRpy(1.0 * k, 0.0, -2.0, 0.0, 0.0, 0.0); }
+};
+
+ClosureLine closureLine() {
   auto created = PoseGraph::create();
-  ASSERT_TRUE(created.ok());
-  PoseGraph graph = std::move(created.value());
-  const auto truth = [](int k) { return geometry::poseFromXyzRpy(1.0 * k, 0.0, -2.0, 0.0, 0.0, 0.0); };
+  EXPECT_TRUE(created.ok());
+  ClosureLine line{std::move(created.value()), {}};
   const Eigen::Matrix3d odometry_information = Eigen::Vector3d(1.0 / 0.01, 1.0 / 0.01, 1.0 / 1e-4).asDiagonal();
   const Eigen::Matrix3d absolute_information = Eigen::Vector3d(400.0, 1e4, 1e4).asDiagonal();
   for (int k = 0; k <= 5; ++k) {
-    ASSERT_TRUE(graph.addNode(k, geometry::poseFromXyzRpy(1.0 * k, 0.08 * k, -2.0, 0.0, 0.0, 0.0)).ok());
-    ASSERT_TRUE(graph.addAbsoluteFactor(k, Eigen::Vector3d(-2.0, 0.0, 0.0), absolute_information).ok());
+    EXPECT_TRUE(line.graph.addNode(k, geometry::poseFromXyzRpy(1.0 * k, 0.08 * k, -2.0, 0.0, 0.0, 0.0)).ok());
+    EXPECT_TRUE(line.graph.addAbsoluteFactor(k, Eigen::Vector3d(-2.0, 0.0, 0.0), absolute_information).ok());
     if (k > 0) {
-      ASSERT_TRUE(graph.addOdometryFactor(k - 1, k, Eigen::Vector3d(1.0, 0.08, 0.0), odometry_information).ok());
+      EXPECT_TRUE(line.graph.addOdometryFactor(k - 1, k, Eigen::Vector3d(1.0, 0.08, 0.0), odometry_information).ok());
     }
   }
   Eigen::MatrixXd V_u = Eigen::MatrixXd::Zero(3, 6);
   V_u(0, kX) = V_u(1, kY) = V_u(2, kYaw) = 1.0;
   const Matrix6d covariance = (Vector6d() << 1e-4, 1e-4, 0, 0, 0, 1e-6).finished().asDiagonal();
-  std::vector<LoopClosure> closures;
   for (const int from : {0, 1, 2, 3}) {
-    Vector6d x = toXyzRpy(truth(from).inverse() * truth(5));
+    Vector6d x = toXyzRpy(ClosureLine::truth(from).inverse() * ClosureLine::truth(5));
     if (from == 3) x(kY) += 0.6;
     LoopClosure c;
     c.from = from;
     c.to = 5;
     auto factor = makePartialLoopClosure(V_u, x, covariance);
-    ASSERT_TRUE(factor.ok()) << factor.error().message;
+    EXPECT_TRUE(factor.ok()) << factor.error().message;
     c.factor = factor.value();
-    closures.push_back(c);
+    line.closures.push_back(c);
   }
+  return line;
+}
+
+// Closures already in the graph: the re-check switches the one that disagrees off, and the optimum is
+// then that of the graph without it (the newest node back on the truth); a switched-off closure that
+// agrees is switched back on.
+TEST(ClosureConsistency, AnAcceptedClosureFoundInconsistentIsSwitchedOffAndOneThatAgreesBackOn) {
+  ClosureLine line = closureLine();
+  PoseGraph good_only = line.graph;
+  for (const LoopClosure& c : line.closures) {
+    ASSERT_TRUE(line.graph.addPartialLoopClosure(c.from, c.to, c.factor).ok());
+    if (c.from != 3) {
+      ASSERT_TRUE(good_only.addPartialLoopClosure(c.from, c.to, c.factor).ok());
+    }
+  }
+  ASSERT_TRUE(line.graph.optimize().ok());
+  ASSERT_TRUE(good_only.optimize().ok());
+  // Under the robust loss the wrong closure bends the line a little (the most at node 3, which only
+  // odometry holds).
+  const auto largest_difference = [&] {
+    double d = 0.0;
+    for (int k = 0; k <= 5; ++k) {
+      d = std::max(d, geometry::translationDistance(line.graph.pose(k).value(), good_only.pose(k).value()));
+    }
+    return d;
+  };
+  const double pulled = largest_difference();
+  EXPECT_GT(pulled, 1e-3);
+
+  MappingPipelineConfig config;
+  config.consistency_confidence = 0.999;
+  config.consistency_recheck = true;
+  std::vector<const LoopClosure*> all;
+  for (const LoopClosure& c : line.closures) all.push_back(&c);
+  std::vector<bool> active(4, true);
+  std::vector<std::pair<NodeId, NodeId>> off, on;
+  ASSERT_TRUE(recheckClosures(line.graph, all, active, config, off, on).ok());
+  EXPECT_EQ(active, (std::vector<bool>{true, true, true, false}));
+  EXPECT_EQ(off, (std::vector<std::pair<NodeId, NodeId>>{{3, 5}}));
+  EXPECT_TRUE(on.empty());
+  EXPECT_LT(geometry::translationDistance(line.graph.pose(5).value(), ClosureLine::truth(5)), 0.05);
+  EXPECT_LT(largest_difference(), 1e-3 * pulled) << "pulled " << pulled;
+
+  // A good closure switched off earlier agrees with the optimum: switched back on; the wrong one stays off.
+  ASSERT_TRUE(line.graph.setLoopClosureActive(1, 5, false).ok());
+  active[1] = false;
+  off.clear();
+  ASSERT_TRUE(recheckClosures(line.graph, all, active, config, off, on).ok());
+  EXPECT_EQ(active, (std::vector<bool>{true, true, true, false}));
+  EXPECT_EQ(on, (std::vector<std::pair<NodeId, NodeId>>{{1, 5}}));
+  EXPECT_TRUE(off.empty());
+
+  // Without the check, or with sizes that differ, nothing is switched / an error.
+  config.consistency_confidence = 0.0;
+  std::vector<bool> untouched(4, true);
+  ASSERT_TRUE(recheckClosures(line.graph, all, untouched, config, off, on).ok());
+  EXPECT_EQ(untouched, std::vector<bool>(4, true));
+  std::vector<bool> short_list(3, true);
+  EXPECT_FALSE(recheckClosures(line.graph, all, short_list, config, off, on).ok());
+}
+
+// With the check, the fourth closure of the line is refused and the others enter; without it, all four
+// enter and pull the newest node off.
+TEST(ClosureConsistency, AClosureThatDisagreesWithTheOthersIsRefusedBeforeInsertion) {
+  const ClosureLine line = closureLine();
+  const PoseGraph& graph = line.graph;
+  const std::vector<LoopClosure>& closures = line.closures;
+  const auto truth = ClosureLine::truth;
   MappingPipelineConfig config;
   config.consistency_confidence = 0.999;
   auto checked = optimizeConsistent(graph, closures, 5, config);

@@ -342,6 +342,36 @@ TEST(PoseGraph, OutlierClosuresDownWeightedByCauchyLoss) {
   EXPECT_GT(err_plain, 5.0 * err_robust) << "plain " << err_plain << " robust " << err_robust;
 }
 
+// A closure switched off is left out of the solve: the optimum is bit for bit that of the graph without
+// it; switched on again it pulls as before. Switching a closure that does not exist is an error.
+TEST(PoseGraph, AClosureSwitchedOffIsLeftOutUntilSwitchedOn) {
+  const Scenario s = makeScenario(5, 30);
+  const Pose3 wrong = geometry::poseFromXyzRpy(3.0, -2.0, 0, 0, 0, 0.5);
+  PoseGraphConfig plain;  // no robust loss, so that the wrong closure visibly pulls
+  plain.loop_closure_loss = RobustLoss::kNone;
+  PoseGraph without = buildGraph(s, plain);
+  addTrueClosures(without, s, 30);
+  PoseGraph with = buildGraph(s, plain);
+  addTrueClosures(with, s, 30);
+  ASSERT_TRUE(with.addLoopClosure(4, 20, wrong, closureInformation()).ok());
+  PoseGraph switched = with;
+  ASSERT_TRUE(switched.setLoopClosureActive(4, 20, false).ok());
+  ASSERT_TRUE(without.optimize().ok());
+  ASSERT_TRUE(switched.optimize().ok());
+  ASSERT_TRUE(with.optimize().ok());
+  for (int k = 0; k < 30; ++k) {
+    EXPECT_EQ(switched.estimate(k).value(), without.estimate(k).value()) << "node " << k;
+  }
+  EXPECT_GT((with.estimate(20).value() - without.estimate(20).value()).head<2>().norm(), 0.1);
+  ASSERT_TRUE(switched.setLoopClosureActive(4, 20, true).ok());
+  ASSERT_TRUE(switched.optimize().ok());
+  EXPECT_LT((switched.estimate(20).value() - with.estimate(20).value()).head<2>().norm(), 1e-4);
+  const Status missing = switched.setLoopClosureActive(20, 4, false);  // the closure runs 4 -> 20
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("20 -> 4"), std::string::npos) << missing.error().message;
+  EXPECT_FALSE(switched.setLoopClosureActive(0, 1, false).ok());  // odometry, not a closure
+}
+
 // Thesis Alg. 8 / Eq. 4.2-4.4: a partial closure moves only the constrained directions.
 TEST(PoseGraph, PartialClosureConstrainsOnlyItsDirections) {
   auto graph = PoseGraph::create();

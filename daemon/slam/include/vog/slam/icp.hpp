@@ -44,6 +44,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <numbers>
 #include <string>
 
 namespace vog::slam {
@@ -129,6 +130,13 @@ struct PointToPlaneConfig {
   // 8 correspondences: with sigma_point_m 0.1 and a 0.3 m bound, 72 sigma^2 of cost, where the
   // voxel-sized residuals of a few thousand wall points vary by about 10 sigma^2 between shifts.
   double min_probe_cost_points = 8.0;
+  // Normals agreement: a correspondence counts only when the source point's normal (turned by the
+  // estimate) and the target point's are at most this far apart. Both clouds' normals point towards
+  // the sonar that saw the surface, so the two faces of a thin plate or the near and far sides of a
+  // piling do not pair up. Below pi the source must carry normals too; pi: no check, the default (at
+  // 45 deg the missions of daemon/slam/README.md get fewer wrong closures on every scene and full
+  // coverage on the piers, but one propeller run of ten lost a third of its coverage).
+  double max_normal_angle_rad = std::numbers::pi;
   // false: plain point-to-plane ICP, stepping along every direction that is not numerically
   // singular (the thesis's lambda_min = 0, Fig. 4.13c).
   bool degeneracy_aware = true;

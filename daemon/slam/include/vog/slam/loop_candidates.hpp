@@ -10,8 +10,11 @@
 
 #include <Eigen/Core>
 
+#include <Eigen/Geometry>
+
 #include <cstddef>
 #include <cstdint>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -34,6 +37,10 @@ struct CandidateConfig {
   Status validate() const;
 };
 
+// Errors naming the submap when its pose, box or centroid is not finite, the pose not rigid, or the box
+// has min > max: the checks every function below makes of each footprint it is given.
+Status checkFootprint(const SubmapFootprint& footprint);
+
 // True when b's centroid, mapped into a's frame, lies inside a's AABB.
 bool centroidInside(const SubmapFootprint& a, const SubmapFootprint& b);
 
@@ -49,6 +56,57 @@ Result<std::vector<std::pair<std::size_t, std::size_t>>> findLoopCandidates(cons
 // footprint is checked), and an error when `newest` is out of range.
 Result<std::vector<std::size_t>> findLoopCandidatesOf(const std::vector<SubmapFootprint>& submaps, std::size_t newest,
                                                       const CandidateConfig& config = {});
+
+// The gate of findLoopCandidatesOf for a new submap against every earlier one, over a hash of world
+// x-y cells, so that the search costs what lies near the new submap rather than a test of every submap
+// (a survey of 1000 submaps revisits each place a few times). Each footprint is registered in the cells
+// of two world boxes: its known box's world bounding box and its cloud centroid, each grown by
+// margin_m; the gate's two tests can only pass for a footprint whose box covers the new centroid's cell
+// or whose centroid lies in a cell of the new box, so only those are tested, exactly as
+// findLoopCandidatesOf tests them. A pose change re-registers a footprint only when it leaves its
+// grown boxes: after a whole-graph solve, where every pose moves by centimetres, an update is a
+// containment test. Footprints whose grown box spans more than kMaxCellsPerAxis cells per axis are
+// kept apart and tested on every search (a huge box cannot make an update cost millions of cells).
+class CandidateIndex {
+ public:
+  static constexpr std::int64_t kMaxCellsPerAxis = 64;
+  // cell_m > 0 and margin_m >= 0; gate as findLoopCandidatesOf takes it.
+  static Result<CandidateIndex> create(const CandidateConfig& gate, double cell_m = 4.0, double margin_m = 1.0);
+
+  // Appends the footprint of the next position (size()); checked as findLoopCandidates checks (errors
+  // name the submap; a failed add changes nothing).
+  Status add(const SubmapFootprint& footprint);
+  // Moves the footprint at `position` (error on a position out of range or a non-finite pose).
+  Status setPose(std::size_t position, const geometry::Pose3& T_world_submap);
+  const std::vector<SubmapFootprint>& footprints() const { return footprints_; }
+  std::size_t size() const { return footprints_.size(); }
+
+  // The candidates of a new submap that is to follow the indexed ones: findLoopCandidatesOf(footprints()
+  // + {newest}, size(), gate), the positions in ascending order. Errors on a bad `newest`, as that does.
+  Result<std::vector<std::size_t>> candidatesOf(const SubmapFootprint& newest) const;
+
+ private:
+  struct Registered {
+    Eigen::AlignedBox2d box;       // grown world box of the known box; empty: not in the cells (wide_)
+    Eigen::AlignedBox2d centroid;  // grown world box of the centroid
+    bool wide = false;             // in wide_ rather than in the cells
+  };
+  using Cells = std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>;
+  CandidateIndex(const CandidateConfig& gate, double cell_m, double margin_m)
+      : gate_(gate), cell_m_(cell_m), margin_m_(margin_m) {}
+  Registered grownBoxes(const SubmapFootprint& f) const;
+  void insert(std::uint32_t position, const Registered& r);
+  void erase(std::uint32_t position, const Registered& r);
+
+  CandidateConfig gate_;
+  double cell_m_;
+  double margin_m_;
+  std::vector<SubmapFootprint> footprints_;
+  std::vector<Registered> registered_;
+  Cells box_cells_;                  // cell -> positions whose grown box covers it
+  Cells centroid_cells_;             // cell -> positions whose grown centroid box covers it
+  std::vector<std::uint32_t> wide_;  // positions tested on every search
+};
 
 // Squared Mahalanobis distance of the (x, y, yaw) difference between a registration and the odometry
 // prediction (yaw wrapped) under the relative-pose covariance (3x3, x, y, yaw); errors when the

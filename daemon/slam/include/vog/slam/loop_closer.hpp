@@ -19,6 +19,7 @@
 #include "vog/slam/pose_graph.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -94,6 +95,9 @@ struct LoopClosure {
   geometry::Pose3 T_from_to_prior = geometry::Pose3::Identity();  // from the estimates before ICP
   PartialLoopClosure factor;
   IcpResult icp;
+  // False once the consistency re-check switched it off (MappingPipelineConfig::consistency_recheck):
+  // its factor stays in the graph, unused, until a later re-check finds it consistent again.
+  bool active = true;
 };
 
 struct LoopCloseStats {
@@ -104,6 +108,8 @@ struct LoopCloseStats {
   int skipped_heading = 0;                        // candidates skipped by the viewing-direction gate (not tried)
   int skipped_budget = 0;                         // candidates beyond max_registrations (not tried)
   int ambiguous_directions = 0;                   // directions of tried registrations the probe dropped
+  int switched_off = 0;                           // accepted closures the consistency re-check switched off
+  int switched_on = 0;                            // ... and on again
   void add(const LoopCloseStats& other);
 };
 
@@ -124,10 +130,21 @@ class LoopCloser {
   // indices differ.
   Result<LoopCloseOutcome> closeLoops(const std::vector<LoopSubmap>& submaps,
                                       const std::vector<SubmapFootprint>& footprints, std::size_t newest) const;
+  // The same for the last of `submaps`, with the footprints of the others in a CandidateIndex (its
+  // position k is submaps[k]) and its own as `newest`: the gate tests only the footprints near the new
+  // one (CandidateIndex), so the search does not grow with the mission; the same candidates, so the same
+  // outcome. Errors on sizes or indices that differ, and on a candidate without a finalized grid.
+  Result<LoopCloseOutcome> closeLoops(const std::vector<LoopSubmap>& submaps, const CandidateIndex& index,
+                                      const SubmapFootprint& newest) const;
   const LoopCloserConfig& config() const { return config_; }
 
  private:
   explicit LoopCloser(const LoopCloserConfig& config) : config_(config) {}
+  // Registers submaps[newest] against the candidates `partners` (ascending positions); footprint(k)
+  // gives the footprint of position k (the budget's distances).
+  LoopCloseOutcome registerCandidates(const std::vector<LoopSubmap>& submaps, std::size_t newest,
+                                      const std::vector<std::size_t>& partners,
+                                      const std::function<const SubmapFootprint&(std::size_t)>& footprint) const;
   LoopCloserConfig config_;
 };
 

@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace vog::slam {
@@ -70,6 +71,17 @@ struct MappingPipelineConfig {
   double consistency_confidence = 0.0;
   double consistency_floor_m = 0.05;
   double consistency_floor_rad = geometry::deg2rad(0.5);
+  // Closures that were accepted and are later found inconsistent (needs consistency_confidence > 0):
+  // after every solve that moved the graph, every accepted closure is checked again at the new optimum
+  // with the same statistic; the least consistent one beyond its quantile is switched off
+  // (PoseGraph::setLoopClosureActive) and the whole graph solved again, and when none is beyond, the
+  // most consistent switched-off closure within its quantile is switched back on (not one switched off
+  // in the same re-check), up to recheck_max_solves solves per new submap. The map deforms with the
+  // poses, so it bends back when a closure is switched off. Off by default (daemon/slam/README.md: it
+  // does not make the trajectory better yet), and not offered by vogd: the mission store keeps the
+  // closures as accepted, not the later switches (restore() honours LoopClosure::active).
+  bool consistency_recheck = false;
+  int recheck_max_solves = 8;
   Status validate() const;
 };
 
@@ -97,6 +109,15 @@ Result<ConsistentOptimum> optimizeConsistent(const PoseGraph& without_closures,
                                              const std::vector<LoopClosure>& closures, NodeId newest,
                                              const MappingPipelineConfig& config);
 
+// The consistency re-check (MappingPipelineConfig::consistency_recheck) on `graph`, which holds every
+// closure of `closures` as a factor, switched on where `active` holds, at an optimum: switches closures
+// off and on as described there, solving the whole graph after each switch, and keeps `active` equal to
+// the graph's switches. Appends each switch (from, to) to `switched_off` / `switched_on` in order.
+// Errors on sizes that differ or a failed solve (the graph and `active` are then as far as they got).
+Status recheckClosures(PoseGraph& graph, const std::vector<const LoopClosure*>& closures, std::vector<bool>& active,
+                       const MappingPipelineConfig& config, std::vector<std::pair<NodeId, NodeId>>& switched_off,
+                       std::vector<std::pair<NodeId, NodeId>>& switched_on);
+
 // Where process() spent its time for one closed submap (wall ms, steady clock; figures only, no
 // algorithm reads them).
 struct MappingPhaseTimes {
@@ -114,6 +135,9 @@ struct MappingUpdate {
   bool optimized = false;
   OptimizeResult optimize;           // valid when optimized
   std::vector<map::SubmapId> moved;  // submaps whose base pose changed in the VogMap
+  // Earlier closures (from, to) the consistency re-check switched off or back on in this call, in order.
+  std::vector<std::pair<NodeId, NodeId>> switched_off;
+  std::vector<std::pair<NodeId, NodeId>> switched_on;
   // The new submap as the builder closed it (grid, odometry factor, absolute measurement): what a
   // mission store persists so that restore() can rebuild the graph. Set iff closed_submap is.
   std::optional<ClosedSubmap> closed;
@@ -169,12 +193,13 @@ class MappingPipeline {
 
  private:
   MappingPipeline(const MappingPipelineConfig& config, SubmapBuilder builder, LoopCloser closer, PoseGraph graph,
-                  std::unique_ptr<map::VogMap> map)
+                  std::unique_ptr<map::VogMap> map, CandidateIndex candidates)
       : config_(config),
         builder_(std::move(builder)),
         closer_(std::move(closer)),
         graph_(std::move(graph)),
-        map_(std::move(map)) {}
+        map_(std::move(map)),
+        candidates_(std::move(candidates)) {}
   Result<MappingUpdate> process(ClosedSubmap closed);
 
   MappingPipelineConfig config_;
@@ -183,10 +208,11 @@ class MappingPipeline {
   PoseGraph graph_;
   std::unique_ptr<map::VogMap> map_;
   std::vector<SubmapRecord> submaps_;
-  // The loop closer's view of every submap, in the order of submaps_ and at the same poses: kept so that
-  // a new submap costs O(N) gate tests, not N centroid computations and a copy of every list.
+  // The loop closer's view of every submap and their footprints, in the order of submaps_ and at the same
+  // poses: kept so that a new submap's candidate search tests the submaps near it (CandidateIndex), not
+  // N centroid computations and a copy of every list.
   std::vector<LoopSubmap> loop_submaps_;
-  std::vector<SubmapFootprint> footprints_;
+  CandidateIndex candidates_;
   std::vector<LoopClosure> closures_;
   LoopCloseStats stats_;
   std::optional<Error> failed_;  // set by an internal failure in process()

@@ -112,6 +112,10 @@ class PoseGraph {
   // 3D relative pose with g2o's EDGE_SE3:QUAT error e = (t, qx, qy, qz) of Z^-1 X_from^-1 X_to, unit
   // quaternion with qw >= 0; information 6x6 over e. No robust loss.
   Status addSe3Factor(NodeId from, NodeId to, const geometry::Pose3& T_from_to, const Matrix6d& information);
+  // Switches the loop closures (full or partial) between `from` and `to` off or back on: a closure
+  // switched off stays in the graph but no solve, initialisation or neighbourhood uses it until it is
+  // switched on again. Errors, changing nothing, when no loop closure joins the two nodes.
+  Status setLoopClosureActive(NodeId from, NodeId to, bool active);
   // Holds all six components of an existing node constant in optimize() (g2o's FIX).
   Status fixNode(NodeId id);
 
@@ -185,6 +189,7 @@ class PoseGraph {
     Eigen::MatrixXd projection;        // k x 6
     Eigen::MatrixXd sqrt_information;  // k x k, upper triangular
     geometry::Pose3 T_from_to = geometry::Pose3::Identity();  // SE3 only
+    bool active = true;                                       // loop closures: setLoopClosureActive
   };
   std::vector<NodeId> roots() const;
   // Breadth-first order from the roots over the relative factors except partial closures: (node,
