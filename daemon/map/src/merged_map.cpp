@@ -11,12 +11,6 @@
 
 namespace vog::map {
 
-namespace {
-constexpr int kPackBits = 21;
-constexpr std::uint64_t kPackMask = (std::uint64_t{1} << kPackBits) - 1;
-constexpr int kPackBias = 1 << (kPackBits - 1);
-}  // namespace
-
 Status MergeConfig::validate() const {
   if (!(remerge_translation_m >= 0.0) || !std::isfinite(remerge_translation_m))
     return Error{"merge.remerge_translation_m must be finite and >= 0, got " + std::to_string(remerge_translation_m)};
@@ -24,13 +18,6 @@ Status MergeConfig::validate() const {
     return Error{"merge.remerge_rotation_rad must be finite and >= 0, got " + std::to_string(remerge_rotation_rad)};
   if (threads < 0 || threads > 64) return Error{"merge.threads must be in [0, 64], got " + std::to_string(threads)};
   return {};
-}
-
-std::uint64_t MergedMap::packBlock(const VoxelKey& b) {
-  static_assert(kPackBits == 21, "shardOf() reads the y block coordinate at bit 21");
-  return (static_cast<std::uint64_t>(b.x() + kPackBias) & kPackMask) |
-         ((static_cast<std::uint64_t>(b.y() + kPackBias) & kPackMask) << kPackBits) |
-         ((static_cast<std::uint64_t>(b.z() + kPackBias) & kPackMask) << (2 * kPackBits));
 }
 
 VoxelKey MergedMap::unpackBlock(std::uint64_t p) {
@@ -47,28 +34,6 @@ MergedMap::MergedMap(const GridConfig& config)
 Result<std::unique_ptr<MergedMap>> MergedMap::create(const GridConfig& config) {
   if (auto s = config.validate(); !s) return s.error();
   return std::unique_ptr<MergedMap>(new MergedMap(config));
-}
-
-const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
-  const std::uint64_t packed = packBlock(blockOf(key));
-  return shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
-}
-
-VoxelValue MergedMap::valueOf(const Block& block, int index) const {
-  const auto i = static_cast<std::size_t>(index);
-  if (block.count(i) == 0) return {};
-  const double clamped = bounds_.clamp(block.sum(i));
-  return {clamped, bounds_.classify(clamped)};
-}
-
-VoxelValue MergedMap::at(const VoxelKey& key) const {
-  const Block* block = findBlock(key);
-  return block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{};
-}
-
-VoxelValue MergedMap::query(const Eigen::Vector3d& p_world) const {
-  if (!p_world.allFinite()) return {};
-  return at(pointToKey(p_world, inv_resolution_));
 }
 
 std::vector<LineSample> MergedMap::lineQuery(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2) const {

@@ -35,6 +35,7 @@
 #include "vog/map/vog_map.hpp"
 #include "vog/map/voxel_key.hpp"
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <cstdint>
@@ -174,8 +175,7 @@ class MergedMap {
   };
   // Blocks interleave over the shards in x and y (4 x 4), so any n tasks get even shares of any region.
   static int shardOf(std::uint64_t packed) {
-    constexpr std::uint64_t kYShift = 21;  // kPackBits in merged_map.cpp
-    return static_cast<int>((packed & 3) | (((packed >> kYShift) & 3) << 2));
+    return static_cast<int>((packed & 3) | (((packed >> kPackBits) & 3) << 2));
   }
   // One submap merged in (sign +1) or out (-1), with the map version it gets.
   struct MergeOp {
@@ -184,7 +184,14 @@ class MergedMap {
     std::uint64_t version;
   };
 
-  static std::uint64_t packBlock(const VoxelKey& block);
+  static constexpr int kPackBits = 21;  // per block coordinate in a packed block key
+  static constexpr std::uint64_t kPackMask = (std::uint64_t{1} << kPackBits) - 1;
+  static constexpr int kPackBias = 1 << (kPackBits - 1);
+  static std::uint64_t packBlock(const VoxelKey& block) {
+    return (static_cast<std::uint64_t>(block.x() + kPackBias) & kPackMask) |
+           ((static_cast<std::uint64_t>(block.y() + kPackBias) & kPackMask) << kPackBits) |
+           ((static_cast<std::uint64_t>(block.z() + kPackBias) & kPackMask) << (2 * kPackBits));
+  }
   static VoxelKey unpackBlock(std::uint64_t packed);
   static VoxelKey blockOf(const VoxelKey& key) {
     return {key.x() >> kBlockBits, key.y() >> kBlockBits, key.z() >> kBlockBits};
@@ -278,6 +285,36 @@ void MergedMap::traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& e
     key[axis] += w.step[axis];
     w.t_max[axis] += w.t_delta[axis];
   }
+}
+
+// The point query's path is inline and free of branches on the voxel's value: a query's cost is the
+// cache miss on its block, and with no branch waiting for that load the core starts the next query's
+// miss before this one's returns (independent queries overlap instead of queueing).
+inline const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
+  const std::uint64_t packed = packBlock(blockOf(key));
+  return shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
+}
+
+inline VoxelValue MergedMap::valueOf(const Block& block, int index) const {
+  const auto i = static_cast<std::size_t>(index);
+  // min/max, not fmin/fmax (library calls): the sum is never NaN, and these are single instructions.
+  const double clamped = std::max(bounds_.min, std::min(bounds_.max, block.sum(i)));
+  const bool known = block.count(i) != 0;
+  VoxelValue value;
+  value.log_odds = known ? clamped : 0.0;
+  // kUnknown 0, kFree 1, kOccupied 2, as bounds_.classify decides for a known voxel.
+  value.status = static_cast<Occupancy>(static_cast<int>(known) * (1 + static_cast<int>(clamped > bounds_.occupied)));
+  return value;
+}
+
+inline VoxelValue MergedMap::at(const VoxelKey& key) const {
+  const Block* block = findBlock(key);
+  return block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{};
+}
+
+inline VoxelValue MergedMap::query(const Eigen::Vector3d& p_world) const {
+  if (!p_world.allFinite()) return {};
+  return at(pointToKey(p_world, inv_resolution_));
 }
 
 }  // namespace vog::map
