@@ -4,6 +4,7 @@
 
 #include "vog/core/result.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -22,7 +23,8 @@ struct LogOddsBounds {
   double max = 0.0;
   double occupied = 0.0;
 
-  double clamp(double l) const { return std::fmax(min, std::fmin(max, l)); }
+  // std::min/max (single instructions, where fmin/fmax are library calls); NaN clamps to max as with fmin/fmax.
+  double clamp(double l) const { return std::max(min, std::min(max, l)); }
   Occupancy classify(double l) const { return l > occupied ? Occupancy::kOccupied : Occupancy::kFree; }
 };
 

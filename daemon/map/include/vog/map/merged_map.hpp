@@ -296,14 +296,13 @@ inline const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
 }
 
 inline VoxelValue MergedMap::valueOf(const Block& block, int index) const {
+  static_assert(static_cast<int>(Occupancy::kUnknown) == 0, "an unknown voxel's status is 0 times its class");
   const auto i = static_cast<std::size_t>(index);
-  // min/max, not fmin/fmax (library calls): the sum is never NaN, and these are single instructions.
-  const double clamped = std::max(bounds_.min, std::min(bounds_.max, block.sum(i)));
+  const double clamped = bounds_.clamp(block.sum(i));
   const bool known = block.count(i) != 0;
   VoxelValue value;
   value.log_odds = known ? clamped : 0.0;
-  // kUnknown 0, kFree 1, kOccupied 2, as bounds_.classify decides for a known voxel.
-  value.status = static_cast<Occupancy>(static_cast<int>(known) * (1 + static_cast<int>(clamped > bounds_.occupied)));
+  value.status = static_cast<Occupancy>(static_cast<int>(known) * static_cast<int>(bounds_.classify(clamped)));
   return value;
 }
 
