@@ -269,7 +269,7 @@ void MergedMap::applyParallel(const std::vector<MergeOp>& ops, std::size_t begin
   const std::size_t n = end - begin;
   if (scratch.size() < n * tasks) scratch.resize(n * tasks);
   for (auto& list : scratch) list.clear();
-  // The task owning each shard, looked up per voxel (a division by `tasks` there cost a quarter of phase 1).
+  // The task owning each shard, looked up per voxel (instead of a 64-bit division by `tasks` per voxel).
   std::array<std::uint8_t, kShards> owner{};
   for (std::size_t s = 0; s < owner.size(); ++s) owner[s] = static_cast<std::uint8_t>(s % tasks);
   // Phase 1: each op evaluated by one task, read-only, into one list per owner of the shards it touches.
