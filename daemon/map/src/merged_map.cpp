@@ -53,7 +53,7 @@ std::vector<LineSample> MergedMap::lineQuery(const Eigen::Vector3d& p1, const Ei
     const std::uint64_t packed = packBlock(blockOf(key));
     if (packed != block_packed) {
       block_packed = packed;
-      block = shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
+      block = findPacked(packed);
     }
     out.push_back({x, block != nullptr ? valueOf(*block, indexIn(key)) : VoxelValue{}});
   }

@@ -63,6 +63,25 @@ TEST(LocalGrid, RepeatedHitsClampAtTheUpperBound) {
   EXPECT_NEAR(*grid->logOdds({0.5, 0.0, 0.0}), grid->config().bounds().min, 1e-5);
 }
 
+// Every reader of a voxel (merged map, sequential query, traversability, deltas) clamps through these
+// bounds: values inside pass unchanged, values beyond stop at the bound, and NaN reads as the upper
+// bound rather than travelling on.
+TEST(LogOddsBounds, ClampKeepsInsideValuesStopsAtTheBoundsAndSendsNaNToTheUpperBound) {
+  const LogOddsBounds b = GridConfig{}.bounds();
+  ASSERT_LT(b.min, 0.0);
+  ASSERT_GT(b.max, 0.0);
+  EXPECT_EQ(b.clamp(0.25), 0.25);
+  EXPECT_EQ(b.clamp(b.min), b.min);
+  EXPECT_EQ(b.clamp(b.max), b.max);
+  EXPECT_EQ(b.clamp(b.max + 1.0), b.max);
+  EXPECT_EQ(b.clamp(b.min - 1.0), b.min);
+  EXPECT_EQ(b.clamp(std::numeric_limits<double>::infinity()), b.max);
+  EXPECT_EQ(b.clamp(-std::numeric_limits<double>::infinity()), b.min);
+  EXPECT_EQ(b.clamp(std::numeric_limits<double>::quiet_NaN()), b.max);
+  EXPECT_EQ(b.classify(b.clamp(std::numeric_limits<double>::quiet_NaN())), Occupancy::kOccupied);
+  EXPECT_EQ(b.classify(b.occupied), Occupancy::kFree);  // occupied only above the threshold
+}
+
 TEST(LocalGrid, FinalizedGridIsImmutable) {
   auto grid = makeGrid();
   const std::vector<BeamEnd> beams = {{Eigen::Vector3d(1.0, 0.0, 0.0), true}};

@@ -200,7 +200,8 @@ class MergedMap {
     constexpr int m = kBlockSide - 1;
     return ((key.z() & m) << (2 * kBlockBits)) | ((key.y() & m) << kBlockBits) | (key.x() & m);
   }
-  const Block* findBlock(const VoxelKey& key) const;
+  const Block* findBlock(const VoxelKey& key) const { return findPacked(packBlock(blockOf(key))); }
+  const Block* findPacked(std::uint64_t packed) const;
   VoxelValue valueOf(const Block& block, int index) const;
   // One voxel's change from one submap: what a parallel merge's first phase hands to the second.
   struct Contribution {
@@ -290,8 +291,7 @@ void MergedMap::traverse(const Eigen::Vector3d& origin, const Eigen::Vector3d& e
 // The point query's path is inline and free of branches on the voxel's value: a query's cost is the
 // cache miss on its block, and with no branch waiting for that load the core starts the next query's
 // miss before this one's returns (independent queries overlap instead of queueing).
-inline const MergedMap::Block* MergedMap::findBlock(const VoxelKey& key) const {
-  const std::uint64_t packed = packBlock(blockOf(key));
+inline const MergedMap::Block* MergedMap::findPacked(std::uint64_t packed) const {
   return shards_[static_cast<std::size_t>(shardOf(packed))].blocks.find(packed);
 }
 
