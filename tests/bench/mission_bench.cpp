@@ -309,6 +309,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       [&](double deg) { mc.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
       "loop closures: largest angle between corresponding points' normals, deg (180: no check, the default; 45 "
       "measured)");
+  app.add_option("--lc-normal-search-neighbours", mc.loop_closer.point_to_plane.normal_search_neighbours,
+                 "loop closures: with the normals check, the nearest agreeing of this many nearest target points (1: "
+                 "the nearest only)");
   app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
                  "loop closures: share of the source cloud with a correspondence at the result");
   app.add_option_function<double>(

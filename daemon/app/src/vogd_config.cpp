@@ -97,6 +97,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.integer("probe_steps", lc.point_to_plane.probe_steps, 0, 100);
   l.number("min_probe_cost_points", lc.point_to_plane.min_probe_cost_points, 0.0, 1e6);
   l.degrees("max_normal_angle_deg", lc.point_to_plane.max_normal_angle_rad, 1.0, 180.0);
+  l.integer("normal_search_neighbours", lc.point_to_plane.normal_search_neighbours, 1, 64);
   double corr = lc.point_to_plane.max_correspondence_distance_m;
   l.number("max_correspondence_distance_m", corr, 0.01, 10.0);
   lc.point_to_plane.max_correspondence_distance_m = corr;

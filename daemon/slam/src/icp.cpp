@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -69,12 +70,52 @@ struct Linearisation {
   double sum_sq_inliers = 0.0;
 };
 
-// A correspondence counts only when the source point's normal, turned into the target frame, and the
-// target point's make a cosine of at least min_normal_cos (normals agreement; -1: any, and the source
-// need not carry normals).
+// Normals agreement: a correspondence counts only when the source point's normal, turned into the
+// target frame, and the target point's make a cosine of at least min_cos; the source point pairs
+// with the nearest of its `search` nearest target points that agrees. min_cos -1: no check, the
+// nearest target point pairs and the source need not carry normals.
+struct NormalsCheck {
+  double min_cos = -1.0;
+  std::size_t search = 1;
+  bool on() const { return min_cos > -1.0; }
+};
+
+NormalsCheck normalsCheck(const PointToPlaneConfig& config) {
+  return {std::cos(config.max_normal_angle_rad), static_cast<std::size_t>(config.normal_search_neighbours)};
+}
+
+// The target point a source point at tp (target frame, normal tn there) pairs with within max_dist_sq,
+// by the rule above: its index and squared distance, or nothing.
+class Correspondences {
+ public:
+  Correspondences(const geometry::PointCloud& target, const NearestNeighbours& nn, const NormalsCheck& check)
+      : target_(target), nn_(nn), check_(check) {}
+
+  std::optional<std::pair<std::size_t, double>> find(const Eigen::Vector3d& tp, const Eigen::Vector3d& tn,
+                                                     double max_dist_sq) {
+    if (!check_.on()) {
+      const auto nearest = nn_.nearest(tp);
+      if (nearest.second > max_dist_sq) return std::nullopt;
+      return nearest;
+    }
+    nn_.nearestK(tp, check_.search, index_, dist_sq_);
+    for (std::size_t j = 0; j < index_.size() && dist_sq_[j] <= max_dist_sq; ++j) {
+      if (target_.normals[index_[j]].dot(tn) >= check_.min_cos) return std::make_pair(index_[j], dist_sq_[j]);
+    }
+    return std::nullopt;
+  }
+
+ private:
+  const geometry::PointCloud& target_;
+  const NearestNeighbours& nn_;
+  NormalsCheck check_;
+  std::vector<std::size_t> index_;  // scratch of nearestK
+  std::vector<double> dist_sq_;
+};
+
 Linearisation linearisePointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
                                     const NearestNeighbours& nn, const Vector6d& x, const std::vector<int>& comps,
-                                    double max_dist_m, double inlier_dist_m, double min_normal_cos) {
+                                    double max_dist_m, double inlier_dist_m, const NormalsCheck& check) {
   const geometry::Pose3 T = fromXyzRpy(x);
   const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
   const auto m = static_cast<Eigen::Index>(comps.size());
@@ -84,15 +125,16 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
   const double max_dist_sq = max_dist_m * max_dist_m;
   Eigen::Matrix<double, 1, 6> J_full;
   Eigen::RowVectorXd J(m);
-  const bool check_normals = min_normal_cos > -1.0;
+  Correspondences correspondences(target, nn, check);
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Eigen::Vector3d& p = source.points[i];
     const Eigen::Vector3d tp = T * p;
-    const auto [idx, dist_sq] = nn.nearest(tp);
-    if (dist_sq > max_dist_sq) continue;
+    const Eigen::Vector3d tn = check.on() ? Eigen::Vector3d(T.linear() * source.normals[i]) : Eigen::Vector3d::Zero();
+    const auto pair = correspondences.find(tp, tn, max_dist_sq);
+    if (!pair) continue;
+    const auto [idx, dist_sq] = *pair;
     const Eigen::Vector3d& q = target.points[idx];
     const Eigen::Vector3d& n = target.normals[idx];
-    if (check_normals && n.dot(T.linear() * source.normals[i]) < min_normal_cos) continue;
     const double r = n.dot(tp - q);
     J_full.head<3>() = n.transpose();
     for (int k = 0; k < 3; ++k) J_full(3 + k) = n.dot(dR[static_cast<std::size_t>(k)] * p);
@@ -156,7 +198,7 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
                              const PointToPlaneConfig& config, const TargetKnown& target_known) {
   if (config.probe_steps == 0 || out.V_u.rows() == 0) return;
   const double c = config.min_correspondence_distance_m;
-  const double min_normal_cos = std::cos(config.max_normal_angle_rad);
+  const NormalsCheck normals = normalsCheck(config);
   const geometry::Pose3 T = fromXyzRpy(x);
   std::vector<std::size_t> kept;
   std::vector<Eigen::Vector3d> kept_normals;  // of their target points at the result
@@ -214,7 +256,7 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
       for (const double sign : {-1.0, 1.0}) {
         Vector6d xs = x + sign * s * v;
         for (int settle = 0; settle < 3 && others.rows() > 0; ++settle) {
-          const Linearisation lin = linearisePointToPlane(source, target, nn, xs, comps, c, 0.0, min_normal_cos);
+          const Linearisation lin = linearisePointToPlane(source, target, nn, xs, comps, c, 0.0, normals);
           if (lin.n < 6) break;
           const Eigen::MatrixXd H = others * lin.AtA * others.transpose();
           const Eigen::VectorXd g = others * lin.Atb;
@@ -298,6 +340,8 @@ Status PointToPlaneConfig::validate() const {
     os << "min_probe_cost_points must be finite and >= 0, got " << min_probe_cost_points;
   else if (!(max_normal_angle_rad > 0.0 && max_normal_angle_rad <= std::numbers::pi))
     os << "max_normal_angle_rad must be in (0, pi], got " << max_normal_angle_rad;
+  else if (normal_search_neighbours < 1 || normal_search_neighbours > 64)
+    os << "normal_search_neighbours must be in [1, 64], got " << normal_search_neighbours;
   else if (min_points < 6)
     os << "min_points must be >= 6, got " << min_points;
   else if (min_correspondences < 6)
@@ -413,8 +457,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
                                   const geometry::Pose3& T_target_source_init, const PointToPlaneConfig& config,
                                   const TargetKnown& target_known) {
   if (Status s = config.validate(); !s) return s.error();
-  const double min_normal_cos = std::cos(config.max_normal_angle_rad);
-  if (Status s = checkCloud(source, "source", config.min_points, min_normal_cos > -1.0); !s) return s.error();
+  const NormalsCheck normals = normalsCheck(config);
+  if (Status s = checkCloud(source, "source", config.min_points, normals.on()); !s) return s.error();
   if (Status s = checkCloud(target, "target", config.min_points, true); !s) return s.error();
   if (!geometry::isValidPose(T_target_source_init)) return Error{"icp: initial pose is not a finite rigid transform"};
 
@@ -430,7 +474,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     if (it > 1) {
       max_distance_m = std::max(config.min_correspondence_distance_m, max_distance_m * config.correspondence_shrink);
     }
-    const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, max_distance_m, 0.0, min_normal_cos);
+    const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, max_distance_m, 0.0, normals);
     if (lin.n < config.min_correspondences) {
       std::ostringstream os;
       os << "icp: only " << lin.n << " correspondences within " << max_distance_m << " m at iteration " << it
@@ -464,7 +508,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   // less: vog-bench mission, pilings / propeller mean coverage 0.97 / 0.85 against 1.00 / 0.89, both
   // without the planner's recovery move); fitness and correspondences within the final bound.
   const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m,
-                                                  config.min_correspondence_distance_m, min_normal_cos);
+                                                  config.min_correspondence_distance_m, normals);
   if (lin.n_inliers < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
   out.n_correspondences = lin.n_inliers;
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);

@@ -41,4 +41,13 @@ std::pair<std::size_t, double> NearestNeighbours::nearest(const Eigen::Vector3d&
   return {index, dist_sq};
 }
 
+void NearestNeighbours::nearestK(const Eigen::Vector3d& q, std::size_t k, std::vector<std::size_t>& index,
+                                 std::vector<double>& dist_sq) const {
+  index.resize(k);
+  dist_sq.resize(k);
+  const std::size_t found = impl_->tree.knnSearch(q.data(), k, index.data(), dist_sq.data());
+  index.resize(found);
+  dist_sq.resize(found);
+}
+
 }  // namespace vog::slam

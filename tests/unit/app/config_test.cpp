@@ -82,6 +82,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(la.point_to_plane.max_correspondence_distance_m, lb.point_to_plane.max_correspondence_distance_m);
   EXPECT_EQ(la.point_to_plane.min_correspondence_distance_m, lb.point_to_plane.min_correspondence_distance_m);
   EXPECT_NEAR(la.point_to_plane.max_normal_angle_rad, lb.point_to_plane.max_normal_angle_rad, 1e-9);
+  EXPECT_EQ(la.point_to_plane.normal_search_neighbours, lb.point_to_plane.normal_search_neighbours);
   EXPECT_NEAR(la.max_heading_difference_rad, lb.max_heading_difference_rad, 1e-4);
   EXPECT_NEAR(la.max_yaw_disagreement_rad, lb.max_yaw_disagreement_rad, 1e-4);
   EXPECT_EQ(la.max_registrations, lb.max_registrations);

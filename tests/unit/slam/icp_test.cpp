@@ -290,6 +290,61 @@ TEST(DegeneracyAwareIcp, NormalsAgreementKeepsTheTwoSidesOfAPostApart) {
   EXPECT_FALSE(agreeing.validate().ok());
 }
 
+// A face x = x_face, y in [-3, 3], z in [-3, -1] on an unjittered 0.1 m grid, normals along
+// `facing_x` (x, y, z of every grid point the same for every face), with range noise; in `T_frame_target`.
+PointCloud gridFace(double x_face, double facing_x, const Pose3& T_frame_target, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 0.005);
+  PointCloud cloud;
+  for (int i = 0; i <= 60; ++i) {
+    for (int j = 0; j <= 20; ++j) {
+      const Eigen::Vector3d p(x_face + g(rng), -3.0 + 0.1 * i, -3.0 + 0.1 * j);
+      cloud.points.push_back(T_frame_target * p);
+      cloud.normals.push_back(T_frame_target.linear() * Eigen::Vector3d(facing_x, 0, 0));
+    }
+  }
+  return cloud;
+}
+
+// A thin plate: the target saw its near face (x = 5, from -x) and its far face 0.12 m behind (from
+// +x), the source the near face only, with a wall that pins y and yaw; the estimate starts 0.1 m off
+// across the plate, so each near-face source point's nearest target point lies on the far face.
+// Without the check they pair and the result ends on the far face; with the check and the nearest
+// point only they find no partner and nothing corrects the offset; the nearest agreeing point among
+// the nearest eight is on the near face, and the result is the truth.
+TEST(DegeneracyAwareIcp, NormalsAgreementFindsTheAgreeingFaceBehindTheNearestPoint) {
+  PointCloud target = samplePlanes({wallY()}, Pose3::Identity(), 0.1, 0.01, 0.02, 41);
+  append(target, gridFace(5.0, -1.0, Pose3::Identity(), 42));
+  append(target, gridFace(5.12, +1.0, Pose3::Identity(), 43));
+  PointCloud source = samplePlanes({wallY()}, kTruth.inverse(), 0.1, 0.01, 0.02, 44);
+  append(source, gridFace(5.0, -1.0, kTruth.inverse(), 45));
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.1;
+  const auto across_error = [](const Pose3& T) { return std::abs(T.translation().x() - kTruth.translation().x()); };
+
+  const auto paired = icpPointToPlane(source, target, fromXyzRpy(x0), PointToPlaneConfig{});
+  ASSERT_TRUE(paired.ok()) << paired.error().message;
+  EXPECT_GT(across_error(paired->T_target_source), 0.05);
+
+  PointToPlaneConfig nearest_only;
+  nearest_only.max_normal_angle_rad = deg2rad(45.0);
+  nearest_only.normal_search_neighbours = 1;
+  const auto stuck = icpPointToPlane(source, target, fromXyzRpy(x0), nearest_only);
+  ASSERT_TRUE(stuck.ok()) << stuck.error().message;
+  EXPECT_GT(across_error(stuck->T_target_source), 0.05);
+
+  PointToPlaneConfig searching = nearest_only;
+  searching.normal_search_neighbours = PointToPlaneConfig{}.normal_search_neighbours;
+  ASSERT_GT(searching.normal_search_neighbours, 1);
+  const auto found = icpPointToPlane(source, target, fromXyzRpy(x0), searching);
+  ASSERT_TRUE(found.ok()) << found.error().message;
+  EXPECT_LT(across_error(found->T_target_source), 0.01);
+  EXPECT_LT(geometry::rotationAngle(found->T_target_source, kTruth), deg2rad(0.3));
+
+  searching.normal_search_neighbours = 0;
+  EXPECT_FALSE(searching.validate().ok());
+}
+
 TEST(DegeneracyAwareIcp, ThreePlaneCornerFullSixDof) {
   const WallPair w = makeClouds({wallX(), wallY(), floorZ()}, 0.02);
   Vector6d x0 = toXyzRpy(kTruth);

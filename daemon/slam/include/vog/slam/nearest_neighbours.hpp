@@ -22,6 +22,10 @@ class NearestNeighbours {
 
   // Index of the nearest point and its squared distance. The index set must not be empty.
   std::pair<std::size_t, double> nearest(const Eigen::Vector3d& q) const;
+  // The nearest k points (fewer when the set is smaller), nearest first: their indices in `index` and
+  // squared distances in `dist_sq`, both resized to the count found.
+  void nearestK(const Eigen::Vector3d& q, std::size_t k, std::vector<std::size_t>& index,
+                std::vector<double>& dist_sq) const;
   std::size_t size() const { return n_points_; }
 
  private:
