@@ -48,7 +48,8 @@ void DepthMock::setPressure(double value) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pressure_ = value;
-    send_now = continuous_;
+    send_now = continuous_ || poll_pending_;
+    poll_pending_ = false;
   }
   if (send_now) reply(value);
 }
@@ -85,16 +86,19 @@ void DepthMock::onHostBytes(std::span<const std::uint8_t> bytes) {
     if (!result.isFrame()) continue;
     const depth::DigiquartzMessage& m = result.frame();
     if (m.kind != depth::DigiquartzMessage::Kind::kCommand || m.destination != 1) continue;
-    double pressure = 0.0;
+    std::optional<double> pressure;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       ++commands_;
       pressure = pressure_;
       if (m.body == "P4") continuous_ = true;
-      if (m.body == "P3") continuous_ = false;
+      if (m.body == "P3") {
+        continuous_ = false;
+        poll_pending_ = !pressure_.has_value();
+      }
     }
     if (m.body == "P3") {
-      reply(pressure);
+      if (pressure) reply(*pressure);
     } else if (m.body == "UN") {
       const std::string line = depth::encodeParameterReply(0, 1, "UN", std::to_string(units_code_));
       pty_->send(std::vector<std::uint8_t>(line.begin(), line.end()));

@@ -167,6 +167,17 @@ TEST(DepthMockTest, PolledAndContinuousRepliesWithEveryFault) {
     ASSERT_TRUE(rig.transport->write(std::vector<std::uint8_t>(line.begin(), line.end())).ok());
   };
 
+  // A poll before the sensor has any reading is answered with the first reading when it comes, not
+  // with a pressure nobody gave (a zero reads as 10 m above the surface).
+  command("P3");
+  ASSERT_TRUE(pumpUntil(rig.ioc, [&] { return (*mock)->commandsReceived() == 1; }));
+  EXPECT_TRUE(values.empty());
+  (*mock)->setPressure(14.6963);
+  ASSERT_TRUE(pumpUntil(rig.ioc, [&] { return values.size() == 1; }));
+  EXPECT_NEAR(values[0], 14.6963, 1e-9);
+  (*mock)->setPressure(15.0);  // answered once: polled mode again
+  values.clear();
+
   // Polled: nothing until asked, then the newest reading.
   (*mock)->setPressure(14.6963);
   (*mock)->setPressure(20.5);

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <string>
 
@@ -40,7 +41,8 @@ class DvlMock {
 // Faults apply to pressure replies; kBadChecksum (the protocol has none) puts a letter into the
 // number, which the decoder must reject.
 // Threading: setPressure() from any thread; commands are answered on the device thread.
-// Invariant: replies carry the newest pressure given, in the configured units.
+// Invariant: replies carry the newest pressure given, in the configured units; a poll before the
+// first reading is answered with that reading when it comes (never with a pressure nobody gave).
 class DepthMock {
  public:
   static Result<std::unique_ptr<DepthMock>> create(const std::filesystem::path& link_path, int units_code = 1,
@@ -60,7 +62,8 @@ class DepthMock {
   int units_code_;
   FaultInjector faults_;
   mutable std::mutex mutex_;
-  double pressure_ = 0.0;           // guarded by mutex_
+  std::optional<double> pressure_;  // guarded by mutex_; none before the first setPressure()
+  bool poll_pending_ = false;       // guarded by mutex_: a P3 came before the first reading
   bool continuous_ = false;         // guarded by mutex_
   std::uint64_t commands_ = 0;      // guarded by mutex_
   std::vector<std::uint8_t> line_;  // device thread: partial command line
