@@ -290,8 +290,8 @@ TEST(DegeneracyAwareIcp, NormalsAgreementKeepsTheTwoSidesOfAPostApart) {
   EXPECT_FALSE(agreeing.validate().ok());
 }
 
-// A face x = x_face, y in [-3, 3], z in [-3, -1] on an unjittered 0.1 m grid, normals along
-// `facing_x` (x, y, z of every grid point the same for every face), with range noise; in `T_frame_target`.
+// A face x = x_face, y in [-3, 3], z in [-3, -1] on an unjittered 0.1 m grid (the same y, z for every
+// face, unlike samplePlanes' jittered one), normals along `facing_x`, with range noise; in `T_frame_target`.
 PointCloud gridFace(double x_face, double facing_x, const Pose3& T_frame_target, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, 0.005);
