@@ -5,6 +5,7 @@
 #include "vog/slam/icp.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace vog::eval {
 
@@ -59,7 +60,8 @@ Result<ReconstructionError> reconstructionError(const std::vector<Eigen::Vector3
   icp.degeneracy_aware = false;
   icp.max_iterations = 50;
   icp.max_correspondence_distance_m = 1.0;
-  icp.min_correspondence_distance_m = 1.0;  // a fixed bound: the error figures stay comparable across changes
+  icp.min_correspondence_distance_m = 1.0;      // a fixed bound: the error figures stay comparable across changes
+  icp.max_normal_angle_rad = std::numbers::pi;  // the estimate's voxel centres carry no normals
   auto aligned = slam::icpPointToPlane(source, reference.cloud(), geometry::Pose3::Identity(), icp);
   if (!aligned) return Error{"reconstruction error: alignment: " + aligned.error().message};
   ReconstructionError out;

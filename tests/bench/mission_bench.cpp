@@ -307,8 +307,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   app.add_option_function<double>(
       "--lc-max-normal-angle-deg",
       [&](double deg) { mc.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: largest angle between corresponding points' normals, deg (180: no check, the default; 45 "
-      "measured)");
+      "loop closures: largest angle between corresponding points' normals, deg (default 45; 180: no check)");
   app.add_option("--lc-normal-search-neighbours", mc.loop_closer.point_to_plane.normal_search_neighbours,
                  "loop closures: with the normals check, the nearest agreeing of this many nearest target points (1: "
                  "the nearest only)");

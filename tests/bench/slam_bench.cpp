@@ -175,6 +175,10 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
                  "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default)");
   app.add_option("--lc-consistency", base.consistency_confidence,
                  "loop closures: confidence of the consistency check before insertion (0: off, the default)");
+  app.add_option_function<double>(
+      "--lc-max-normal-angle-deg",
+      [&](double deg) { base.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
+      "loop closures: largest angle between corresponding points' normals, deg (default 45; 180: no check)");
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {

@@ -63,25 +63,32 @@ Result<std::unique_ptr<LocalGrid>> LocalGrid::create(const GridConfig& config) {
   return std::unique_ptr<LocalGrid>(new LocalGrid(config, std::make_unique<octomap::OcTree>(config.resolution_m)));
 }
 
-Result<std::unique_ptr<LocalGrid>> LocalGrid::fromTree(const GridConfig& config,
-                                                       std::unique_ptr<octomap::OcTree> tree) {
+Result<std::unique_ptr<LocalGrid>> LocalGrid::fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree,
+                                                       std::vector<Eigen::Vector3d> sensor_origins) {
   if (auto s = config.validate(); !s) return s.error();
   if (!tree) return Error{"LocalGrid::fromTree: no tree"};
   if (std::abs(tree->getResolution() - config.resolution_m) > 1e-9) {
     return Error{"LocalGrid::fromTree: tree resolution " + std::to_string(tree->getResolution()) +
                  " differs from map resolution " + std::to_string(config.resolution_m)};
   }
+  for (std::size_t i = 0; i < sensor_origins.size(); ++i) {
+    if (!sensor_origins[i].allFinite()) {
+      return Error{"LocalGrid::fromTree: sensor origin " + std::to_string(i) + " is not finite"};
+    }
+  }
   auto grid = std::unique_ptr<LocalGrid>(new LocalGrid(config, std::move(tree)));
+  grid->sensor_origins_ = std::move(sensor_origins);
   grid->finalize();
   return grid;
 }
 
-Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, const std::filesystem::path& ot_file) {
+Result<std::unique_ptr<LocalGrid>> LocalGrid::load(const GridConfig& config, const std::filesystem::path& ot_file,
+                                                   std::vector<Eigen::Vector3d> sensor_origins) {
   std::ifstream in(ot_file, std::ios::binary);
   if (!in) return Error{"cannot open " + ot_file.string()};
   auto tree = readOcTree(in);
   if (!tree) return Error{ot_file.string() + ": " + tree.error().message};
-  return fromTree(config, std::move(tree).value());
+  return fromTree(config, std::move(tree).value(), std::move(sensor_origins));
 }
 
 Result<std::unique_ptr<LocalGrid>> LocalGrid::deserialize(const GridConfig& config, std::string_view ot_bytes) {
@@ -182,7 +189,7 @@ void LocalGrid::finalize() {
   computeCloud();
   ray_.reset();
   tree_.reset();
-  sensor_origins_ = {};
+  sensor_origins_.shrink_to_fit();
   finalized_ = true;
 }
 
@@ -307,7 +314,7 @@ void LocalGrid::computeCloud() {
   std::vector<std::uint32_t> idx(k);
   std::vector<double> dist(k);
   // Normals are oriented towards the nearest sensor origin (the surface was seen from that side); a
-  // grid read from disk has none and orients towards its base.
+  // grid read back without its origins orients them towards its base.
   CloudAdaptor origins_adaptor{sensor_origins_};
   std::optional<KdTree> origins;
   if (!sensor_origins_.empty()) {

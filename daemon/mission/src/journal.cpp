@@ -29,6 +29,8 @@ void encodeBody(ByteWriter& w, const SubmapClosedRecord& r) {
   w.string16(r.ot_file);
   w.u64(r.ot_size_bytes);
   w.u32(r.ot_crc32c);
+  w.u32(static_cast<std::uint32_t>(r.sensor_origins.size()));
+  for (const Eigen::Vector3d& o : r.sensor_origins) writeMatrix(w, o);
 }
 
 void encodeBody(ByteWriter& w, const LoopClosureRecord& r) {
@@ -88,7 +90,7 @@ Status checkFinite(const M& m, const char* type, const char* field) {
   return Status::success();
 }
 
-Result<JournalRecord> decodeSubmapClosed(ByteReader& in) {
+Result<JournalRecord> decodeSubmapClosed(ByteReader& in, bool with_origins) {
   constexpr const char* kType = "submap-closed";
   SubmapClosedRecord r;
   r.index = in.i64("index");
@@ -104,6 +106,16 @@ Result<JournalRecord> decodeSubmapClosed(ByteReader& in) {
   r.ot_file = in.string16("ot_file");
   r.ot_size_bytes = in.u64("ot_size_bytes");
   r.ot_crc32c = in.u32("ot_crc32c");
+  if (with_origins) {
+    const std::uint32_t n_origins = in.u32("n_sensor_origins");
+    constexpr std::size_t kOriginBytes = 3 * sizeof(double);
+    if (in.ok() && in.remaining() < n_origins * kOriginBytes) {
+      return Error{std::string(kType) + " record: " + std::to_string(n_origins) + " sensor origins need " +
+                   std::to_string(n_origins * kOriginBytes) + " bytes, " + std::to_string(in.remaining()) + " remain"};
+    }
+    r.sensor_origins.resize(in.ok() ? n_origins : 0);
+    for (Eigen::Vector3d& o : r.sensor_origins) readMatrix(in, o, "sensor_origins");
+  }
   if (Status s = finish(in, kType); !s.ok()) return s.error();
   if (reason > static_cast<std::uint8_t>(slam::CloseReason::kFlush)) {
     return Error{std::string(kType) + " record: close reason " + std::to_string(reason) + " is not 0..3"};
@@ -118,6 +130,9 @@ Result<JournalRecord> decodeSubmapClosed(ByteReader& in) {
   if (Status s = checkFinite(r.base_z_roll_pitch, kType, "base_z_roll_pitch"); !s.ok()) return s.error();
   if (Status s = checkFinite(r.odometry_from_previous, kType, "odometry_from_previous"); !s.ok()) return s.error();
   if (Status s = checkFinite(r.odometry_covariance, kType, "odometry_covariance"); !s.ok()) return s.error();
+  for (const Eigen::Vector3d& o : r.sensor_origins) {
+    if (Status s = checkFinite(o, kType, "sensor_origins"); !s.ok()) return s.error();
+  }
   return JournalRecord{std::move(r)};
 }
 
@@ -227,7 +242,8 @@ Result<JournalRecord> decodeRecord(std::span<const std::uint8_t> payload) {
   if (payload.empty()) return Error{"empty record payload"};
   ByteReader in(payload.subspan(1));
   switch (payload[0]) {
-    case static_cast<std::uint8_t>(RecordType::kSubmapClosed): return decodeSubmapClosed(in);
+    case static_cast<std::uint8_t>(RecordType::kSubmapClosedWithoutOrigins): return decodeSubmapClosed(in, false);
+    case static_cast<std::uint8_t>(RecordType::kSubmapClosed): return decodeSubmapClosed(in, true);
     case static_cast<std::uint8_t>(RecordType::kLoopClosure): return decodeLoopClosure(in);
     case static_cast<std::uint8_t>(RecordType::kOptimizedPoses): return decodeOptimizedPoses(in);
     case static_cast<std::uint8_t>(RecordType::kWaypointSent): return decodeWaypoint(in);

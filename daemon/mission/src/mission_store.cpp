@@ -23,6 +23,7 @@ SubmapClosedRecord toRecord(const slam::ClosedSubmap& c, const StoredSubmapFile&
   r.ot_file = file.file_name;
   r.ot_size_bytes = file.size_bytes;
   r.ot_crc32c = file.crc32c;
+  r.sensor_origins = c.grid->sensorOrigins();
   return r;
 }
 
@@ -148,7 +149,7 @@ Result<std::unique_ptr<MissionStore>> MissionStore::open(const std::filesystem::
   out.state = state->state;
   out.waypoint = state->waypoint;
   for (const SubmapClosedRecord& r : state->submaps) {
-    auto g = submaps->read(grid, {r.ot_file, r.ot_size_bytes, r.ot_crc32c});
+    auto g = submaps->read(grid, {r.ot_file, r.ot_size_bytes, r.ot_crc32c}, r.sensor_origins);
     if (!g) return Error{"mission store: submap " + std::to_string(r.index) + ": " + g.error().message};
     out.pipeline.submaps.push_back(fromRecord(r, std::move(g.value())));
     out.pipeline.estimates.push_back(state->estimates.at(r.index));

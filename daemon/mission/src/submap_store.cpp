@@ -80,7 +80,8 @@ Status SubmapStore::verify(const std::filesystem::path& path, const StoredSubmap
 }
 
 Result<std::shared_ptr<const map::LocalGrid>> SubmapStore::read(const map::GridConfig& grid_config,
-                                                                const StoredSubmapFile& file) const {
+                                                                const StoredSubmapFile& file,
+                                                                std::vector<Eigen::Vector3d> sensor_origins) const {
   const std::filesystem::path name(file.file_name);
   if (file.file_name.empty() || name.has_parent_path() || name.filename() != name || file.file_name == "." ||
       file.file_name == "..") {
@@ -88,7 +89,7 @@ Result<std::shared_ptr<const map::LocalGrid>> SubmapStore::read(const map::GridC
   }
   const std::filesystem::path path = dir_ / name;
   if (Status s = verify(path, file); !s.ok()) return s.error();
-  auto grid = map::LocalGrid::load(grid_config, path);
+  auto grid = map::LocalGrid::load(grid_config, path, std::move(sensor_origins));
   if (!grid) return Error{"submap store: " + grid.error().message};
   return std::shared_ptr<const map::LocalGrid>(std::move(grid.value()));
 }

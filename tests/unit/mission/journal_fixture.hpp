@@ -3,6 +3,7 @@
 // subnormals, full-precision doubles), bitwise record equality and raw file access.
 #include "vog/mission/journal.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -47,6 +48,7 @@ inline SubmapClosedRecord sampleSubmap(std::int64_t index, std::mt19937_64& rng)
   r.ot_file = "00000" + std::to_string(index % 10) + ".ot";
   r.ot_size_bytes = 123456 + static_cast<std::uint64_t>(index);
   r.ot_crc32c = 0xDEADBEEFU ^ static_cast<std::uint32_t>(index);
+  for (std::int64_t i = 0; i < 3 * (index % 3); ++i) r.sensor_origins.emplace_back(u(rng), u(rng) * 5.0, -0.0);
   return r;
 }
 
@@ -112,7 +114,10 @@ inline bool same(const SubmapClosedRecord& a, const SubmapClosedRecord& b) {
          bitEqual(a.base_z_roll_pitch, b.base_z_roll_pitch) && a.has_previous == b.has_previous &&
          bitEqual(a.odometry_from_previous, b.odometry_from_previous) &&
          bitEqual(a.odometry_covariance, b.odometry_covariance) && a.ot_file == b.ot_file &&
-         a.ot_size_bytes == b.ot_size_bytes && a.ot_crc32c == b.ot_crc32c;
+         a.ot_size_bytes == b.ot_size_bytes && a.ot_crc32c == b.ot_crc32c &&
+         a.sensor_origins.size() == b.sensor_origins.size() &&
+         std::equal(a.sensor_origins.begin(), a.sensor_origins.end(), b.sensor_origins.begin(),
+                    [](const Eigen::Vector3d& x, const Eigen::Vector3d& y) { return bitEqual(x, y); });
 }
 inline bool same(const LoopClosureRecord& a, const LoopClosureRecord& b) {
   return a.from == b.from && a.to == b.to && bitEqual(a.T_from_to.matrix(), b.T_from_to.matrix()) &&

@@ -192,6 +192,36 @@ TEST(Journal, MalformedPayloadsAreErrorsNeverMisread) {
   auto c = decodeRecord(bytes);
   ASSERT_FALSE(c.ok());
   EXPECT_NE(c.error().message.find("rank 9"), std::string::npos) << c.error().message;
+  // A sensor origin count that does not match the bytes that follow it.
+  auto submap = encodeRecord(testing::sampleSubmap(1, rng));
+  submap.resize(submap.size() - 8);
+  auto m = decodeRecord(submap);
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.error().message.find("3 sensor origins need 72 bytes, 64 remain"), std::string::npos)
+      << m.error().message;
+  auto nan_origin = testing::sampleSubmap(1, rng);
+  nan_origin.sensor_origins[2].y() = std::numeric_limits<double>::quiet_NaN();
+  auto n = decodeRecord(encodeRecord(nan_origin));
+  ASSERT_FALSE(n.ok());
+  EXPECT_NE(n.error().message.find("sensor_origins is not finite"), std::string::npos) << n.error().message;
+}
+
+// Journals written before the sensor origins were recorded (type 1: the same fields without them) are
+// read, with no origins.
+TEST(Journal, SubmapRecordWithoutSensorOriginsIsRead) {
+  std::mt19937_64 rng(3);
+  SubmapClosedRecord want = testing::sampleSubmap(1, rng);
+  ASSERT_FALSE(want.sensor_origins.empty());
+  auto payload = encodeRecord(want);
+  ASSERT_EQ(payload[0], static_cast<std::uint8_t>(RecordType::kSubmapClosed));
+  payload.resize(payload.size() - 4 - 24 * want.sensor_origins.size());  // count and origins
+  payload[0] = static_cast<std::uint8_t>(RecordType::kSubmapClosedWithoutOrigins);
+  auto got = decodeRecord(payload);
+  ASSERT_TRUE(got.ok()) << got.error().message;
+  want.sensor_origins.clear();
+  EXPECT_TRUE(same(got.value(), JournalRecord{want}));
+  payload.push_back(0);
+  EXPECT_FALSE(decodeRecord(payload).ok());
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 // MissionStore on small hand-made submaps: what is written comes back on open() (submap records, grids
-// voxel for voxel, closures, latest estimates, last state and waypoint); an unfinished submap group at
-// the end of the journal is dropped and cut; bad input is a clear error that changes nothing: a mission
-// path that is a file or not writable, a submap file missing or corrupt, a journal naming an unknown
-// record type, hooks called out of order.
+// voxel for voxel with the same cloud, closures, latest estimates, last state and waypoint); an
+// unfinished submap group at the end of the journal is dropped and cut; bad input is a clear error
+// that changes nothing: a mission path that is a file or not writable, a submap file missing or
+// corrupt, a journal naming an unknown record type, hooks called out of order.
 #include "journal_fixture.hpp"
 #include "small_tmpfs.hpp"
 #include "test_support.hpp"
@@ -34,7 +34,11 @@ std::shared_ptr<const map::LocalGrid> smallGrid(int seed) {
                                       0.1f * static_cast<float>(i / 6)),
                      i % 3 != 0);
   }
-  auto grid = map::LocalGrid::fromTree(gridConfig(), std::move(tree));
+  // Seen from the side away from the base (+y): the cloud's normals point away from the base, which
+  // they would not without the origins.
+  const double y = 0.3 * seed;
+  auto grid = map::LocalGrid::fromTree(gridConfig(), std::move(tree),
+                                       {Eigen::Vector3d(0.5, y + 3.0, 0.2), Eigen::Vector3d(-0.5, y + 2.0, 0.0)});
   EXPECT_TRUE(grid.ok());
   return std::shared_ptr<const map::LocalGrid>(std::move(grid.value()));
 }
@@ -99,6 +103,22 @@ void expectGridsEqual(const map::LocalGrid& a, const map::LocalGrid& b) {
   }
 }
 
+// The cloud (what loop closures register) is computed as it was live: the sensor origins that orient
+// its normals come back from the journal.
+void expectCloudsEqual(const map::LocalGrid& a, const map::LocalGrid& b) {
+  ASSERT_EQ(a.sensorOrigins().size(), b.sensorOrigins().size());
+  for (std::size_t i = 0; i < a.sensorOrigins().size(); ++i) {
+    EXPECT_TRUE(testing::bitEqual(a.sensorOrigins()[i], b.sensorOrigins()[i])) << "origin " << i;
+  }
+  ASSERT_EQ(a.cloud().size(), b.cloud().size());
+  ASSERT_GE(a.cloud().size(), 3U);
+  for (std::size_t i = 0; i < a.cloud().size(); ++i) {
+    EXPECT_TRUE(testing::bitEqual(a.cloud().points[i], b.cloud().points[i])) << "point " << i;
+    EXPECT_TRUE(testing::bitEqual(a.cloud().normals[i], b.cloud().normals[i])) << "normal " << i;
+    EXPECT_GT(a.cloud().normals[i].y(), 0.9) << "normal " << i << " points away from the sensor";
+  }
+}
+
 TEST(MissionStore, WhatIsWrittenComesBackOnOpen) {
   test::TempDir dir;
   const auto mission = dir.path() / "mission";
@@ -132,6 +152,7 @@ TEST(MissionStore, WhatIsWrittenComesBackOnOpen) {
     EXPECT_EQ(got.reason, want.reason);
     ASSERT_TRUE(got.grid && got.grid->finalized());
     expectGridsEqual(*got.grid, *want.grid);
+    expectCloudsEqual(*got.grid, *want.grid);
     EXPECT_TRUE(testing::bitEqual(resume.pipeline.estimates[static_cast<std::size_t>(k)], estimate(k, 1)));
   }
   ASSERT_EQ(resume.pipeline.closures.size(), 1U);

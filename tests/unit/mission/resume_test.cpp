@@ -36,6 +36,8 @@ MappingPipelineConfig pipelineConfig() {
   c.loop_closer.mode = slam::LoopClosureMode::kDegenerate;
   c.loop_closer.p2p.max_correspondence_distance_m = 0.5;
   c.loop_closer.point_to_plane.max_correspondence_distance_m = 0.5;
+  // The normals check makes the registrations depend on which way the restored clouds' normals point.
+  c.loop_closer.point_to_plane.max_normal_angle_rad = geometry::deg2rad(45.0);
   return c;
 }
 

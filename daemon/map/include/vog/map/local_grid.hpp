@@ -44,9 +44,13 @@ struct BeamEnd {
 class LocalGrid {
  public:
   static Result<std::unique_ptr<LocalGrid>> create(const GridConfig& config);
-  // Adopts a tree read from disk (resolution must match config); the grid is finalized.
-  static Result<std::unique_ptr<LocalGrid>> fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree);
-  static Result<std::unique_ptr<LocalGrid>> load(const GridConfig& config, const std::filesystem::path& ot_file);
+  // Adopts a tree read from disk (resolution must match config); the grid is finalized. `sensor_origins`
+  // are the scans' origins (grid frame) as sensorOrigins() gave them when the grid was saved: with them
+  // the cloud's normals are oriented as they were live; without them (empty) towards the base.
+  static Result<std::unique_ptr<LocalGrid>> fromTree(const GridConfig& config, std::unique_ptr<octomap::OcTree> tree,
+                                                     std::vector<Eigen::Vector3d> sensor_origins = {});
+  static Result<std::unique_ptr<LocalGrid>> load(const GridConfig& config, const std::filesystem::path& ot_file,
+                                                 std::vector<Eigen::Vector3d> sensor_origins = {});
   // The inverse of serialize(): a finalized grid from .ot bytes (e.g. received over the API).
   static Result<std::unique_ptr<LocalGrid>> deserialize(const GridConfig& config, std::string_view ot_bytes);
 
@@ -85,6 +89,9 @@ class LocalGrid {
   Eigen::AlignedBox3d knownBox() const;
   // Downsampled centres of occupied voxels with unit normals (grid frame), oriented towards the sensor.
   const geometry::PointCloud& cloud() const { return cloud_; }
+  // The origin of every scan inserted (grid frame), in insertion order; what orients the cloud's normals.
+  // Kept after finalize() (24 bytes per scan) so that a saved grid can be read back with the same cloud.
+  const std::vector<Eigen::Vector3d>& sensorOrigins() const { return sensor_origins_; }
   Eigen::Vector3d cloudCentroid() const;
 
   // Every leaf of the tree: the inclusive key box it covers and its log-odds.
@@ -121,7 +128,7 @@ class LocalGrid {
   std::unique_ptr<octomap::OcTree> tree_;  // null once finalized
   std::size_t scan_count_ = 0;
   bool finalized_ = false;
-  std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not persisted, dropped by finalize()
+  std::vector<Eigen::Vector3d> sensor_origins_;  // for orienting normals; not in the .ot (see fromTree)
   // insertRays()'s buffer of ray keys: OctoMap sizes it for 100,000 keys (600 kB), so it is made once
   // per grid, not per scan, and dropped by finalize().
   std::unique_ptr<octomap::KeyRay> ray_;

@@ -25,15 +25,18 @@
 namespace vog::mission {
 
 enum class RecordType : std::uint8_t {
-  kSubmapClosed = 1,
+  kSubmapClosedWithoutOrigins = 1,  // the layout before sensor origins were recorded: read, never written
   kLoopClosure = 2,
   kOptimizedPoses = 3,
   kWaypointSent = 4,
   kMissionState = 5,
+  kSubmapClosed = 6,  // type 1's fields, then the grid's sensor origins
 };
 
 // A closed submap: the builder's output minus the grid, which lives in `ot_file` (relative to the
-// mission's submaps/ directory) with the given size and CRC-32C so that a damaged file is detected.
+// mission's submaps/ directory) with the given size and CRC-32C so that a damaged file is detected,
+// and the grid's sensor origins, which the .ot file cannot hold (empty in journals written before they
+// were recorded: such a grid orients its normals towards its base).
 struct SubmapClosedRecord {
   std::int64_t index = 0;
   std::int64_t first_stamp_ns = 0;
@@ -48,6 +51,7 @@ struct SubmapClosedRecord {
   std::string ot_file;
   std::uint64_t ot_size_bytes = 0;
   std::uint32_t ot_crc32c = 0;
+  std::vector<Eigen::Vector3d> sensor_origins;  // LocalGrid::sensorOrigins(), grid frame
 };
 
 // An accepted loop closure and its partial factor (thesis Alg. 8).

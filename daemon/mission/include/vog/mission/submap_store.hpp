@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace vog::mission {
 
@@ -32,9 +33,10 @@ class SubmapStore {
   static std::string fileName(std::int64_t index);
   Result<StoredSubmapFile> write(std::int64_t index, const map::LocalGrid& grid) const;
   // Loads a stored grid after checking that the file exists and has the recorded size and CRC-32C.
-  // `file_name` must be a plain file name (no directory part): it comes from a journal.
-  Result<std::shared_ptr<const map::LocalGrid>> read(const map::GridConfig& grid_config,
-                                                     const StoredSubmapFile& file) const;
+  // `file_name` must be a plain file name (no directory part): it comes from a journal, as do the
+  // grid's sensor origins (LocalGrid::fromTree), which the .ot file does not hold.
+  Result<std::shared_ptr<const map::LocalGrid>> read(const map::GridConfig& grid_config, const StoredSubmapFile& file,
+                                                     std::vector<Eigen::Vector3d> sensor_origins = {}) const;
   const std::filesystem::path& dir() const { return dir_; }
 
  private:

@@ -133,12 +133,11 @@ struct PointToPlaneConfig {
   // Normals agreement: a correspondence counts only when the source point's normal (turned by the
   // estimate) and the target point's are at most this far apart. Both clouds' normals point towards
   // the sonar that saw the surface, so the two faces of a thin plate or the near and far sides of a
-  // piling do not pair up. Below pi the source must carry normals too; pi: no check, the default. At
-  // 45 deg (with the search below) the missions of daemon/slam/README.md end with a smaller trajectory
-  // error on every scene, but a grid read back from the mission folder orients its normals towards its
-  // base (the sensor origins are not stored), so a resumed mission would not continue as the
-  // uninterrupted one does.
-  double max_normal_angle_rad = std::numbers::pi;
+  // piling do not pair up. Below pi the source must carry normals too; pi: no check. At 45 deg (with
+  // the search below) the missions of daemon/slam/README.md end with a smaller trajectory error on every
+  // scene than without the check. A grid read back from a mission folder orients its normals as it did
+  // live (its sensor origins are in the journal), so a resumed mission continues as an uninterrupted one.
+  double max_normal_angle_rad = std::numbers::pi / 4.0;
   // With the check on, a source point pairs with the nearest of its normal_search_neighbours nearest
   // target points whose normal agrees (1: the nearest only, dropped when it disagrees). Where the two
   // submaps' estimates are still apart, the nearest target point often lies on another face (a thin
