@@ -84,6 +84,13 @@ NormalsCheck normalsCheck(const PointToPlaneConfig& config) {
   return {std::cos(config.max_normal_angle_rad), static_cast<std::size_t>(config.normal_search_neighbours)};
 }
 
+// Source point i's normal turned into the target frame by T, as the check needs it (zero without it: the
+// source need not carry normals then).
+Eigen::Vector3d turnedNormal(const geometry::PointCloud& source, std::size_t i, const geometry::Pose3& T,
+                             const NormalsCheck& check) {
+  return check.on() ? Eigen::Vector3d(T.linear() * source.normals[i]) : Eigen::Vector3d::Zero();
+}
+
 // The target point a source point at tp (target frame, normal tn there) pairs with within max_dist_sq,
 // by the rule above: its index and squared distance, or nothing.
 class Correspondences {
@@ -129,7 +136,7 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Eigen::Vector3d& p = source.points[i];
     const Eigen::Vector3d tp = T * p;
-    const Eigen::Vector3d tn = check.on() ? Eigen::Vector3d(T.linear() * source.normals[i]) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d tn = turnedNormal(source, i, T, check);
     const auto pair = correspondences.find(tp, tn, max_dist_sq);
     if (!pair) continue;
     const auto [idx, dist_sq] = *pair;
@@ -181,14 +188,17 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
   }
 }
 
-// Truncated point-to-plane cost of a source point at T: min(r^2, c^2), c^2 when no target point lies
-// within c.
-double truncatedCost(const geometry::PointCloud& target, const NearestNeighbours& nn, const Eigen::Vector3d& tp,
-                     double c) {
-  const auto [idx, dist_sq] = nn.nearest(tp);
-  if (dist_sq > c * c) return c * c;
-  const double r = target.normals[idx].dot(tp - target.points[idx]);
-  return std::min(r * r, c * c);
+// The target point a source point at tp (normal tn there) pairs with within c, by the registration's
+// rule, and the truncated point-to-plane cost min(r^2, c^2) against it; nothing when it pairs with none
+// (its cost is then c^2).
+std::optional<std::pair<std::size_t, double>> truncatedCost(Correspondences& correspondences,
+                                                            const geometry::PointCloud& target,
+                                                            const Eigen::Vector3d& tp, const Eigen::Vector3d& tn,
+                                                            double c) {
+  const auto pair = correspondences.find(tp, tn, c * c);
+  if (!pair) return std::nullopt;
+  const double r = target.normals[pair->first].dot(tp - target.points[pair->first]);
+  return std::make_pair(pair->first, std::min(r * r, c * c));
 }
 
 // The unique-optimum probe (icp.hpp): drops from out's well-conditioned directions those along which
@@ -199,17 +209,18 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
   if (config.probe_steps == 0 || out.V_u.rows() == 0) return;
   const double c = config.min_correspondence_distance_m;
   const NormalsCheck normals = normalsCheck(config);
+  Correspondences correspondences(target, nn, normals);
   const geometry::Pose3 T = fromXyzRpy(x);
   std::vector<std::size_t> kept;
   std::vector<Eigen::Vector3d> kept_normals;  // of their target points at the result
   std::vector<double> kept_costs;             // at the result
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Eigen::Vector3d tp = T * source.points[i];
-    const auto [idx, dist_sq] = nn.nearest(tp);
-    if (dist_sq > c * c) continue;
+    const auto paired = truncatedCost(correspondences, target, tp, turnedNormal(source, i, T, normals), c);
+    if (!paired) continue;
     kept.push_back(i);
-    kept_normals.push_back(target.normals[idx]);
-    kept_costs.push_back(truncatedCost(target, nn, tp, c));
+    kept_normals.push_back(target.normals[paired->first]);
+    kept_costs.push_back(paired->second);
   }
   if (kept.empty()) return;
   // The cost a shift adds over the kept points, leaving out those that slide along their surface to
@@ -220,7 +231,8 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
     for (std::size_t j = 0; j < kept.size(); ++j) {
       const Eigen::Vector3d tp = Ts * source.points[kept[j]];
       if (sliding[j] && target_known && !target_known(tp)) continue;
-      sum += truncatedCost(target, nn, tp, c) - kept_costs[j];
+      const auto paired = truncatedCost(correspondences, target, tp, turnedNormal(source, kept[j], Ts, normals), c);
+      sum += (paired ? paired->second : c * c) - kept_costs[j];
     }
     return sum;
   };

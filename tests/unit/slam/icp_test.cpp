@@ -307,6 +307,39 @@ PointCloud gridFace(double x_face, double facing_x, const Pose3& T_frame_target,
   return cloud;
 }
 
+// The probe pairs points by the registration's rule. A slab as thick as the probe's first shift: the
+// target saw its near face (x = 5, from -x) and its far face (from +x), the source the near face only,
+// with a wall that pins y and yaw. Shifted across the slab by that much, the source's face lies on
+// the target's far face: paired with the nearest point, the shift costs nothing and the probe drops
+// the direction the near face pins; with the normals check the far face's points are no partners
+// (they were seen from the other side), the shift costs, and the direction stays.
+TEST(DegeneracyAwareIcp, ProbePairsPointsByTheNormalsCheck) {
+  PointToPlaneConfig checked = withProbe();
+  ASSERT_LT(checked.max_normal_angle_rad, std::numbers::pi) << "the normals check is on by default";
+  const double thickness = checked.probe_max_shift_m / checked.probe_steps;
+  // No turn between the two, and the faces centred on the source's x axis: x is an eigenvector of its
+  // own (the wall, sampled more sparsely, pins y and yaw), so the probe's first shift is `thickness`.
+  const Pose3 truth = geometry::poseFromXyzRpy(0.4, 0.0, 0.0, 0.0, 0.0, 0.0);
+  PointCloud target = samplePlanes({wallY()}, Pose3::Identity(), 0.2, 0.01, 0.02, 51);
+  append(target, gridFace(5.0, -1.0, Pose3::Identity(), 52));
+  append(target, gridFace(5.0 + thickness, +1.0, Pose3::Identity(), 53));
+  PointCloud source = samplePlanes({wallY()}, truth.inverse(), 0.2, 0.01, 0.02, 54);
+  append(source, gridFace(5.0, -1.0, truth.inverse(), 55));
+
+  PointToPlaneConfig unchecked = checked;
+  unchecked.max_normal_angle_rad = std::numbers::pi;
+  const auto nearest = icpPointToPlane(source, target, truth, unchecked);
+  ASSERT_TRUE(nearest.ok()) << nearest.error().message;
+  EXPECT_EQ(nearest->ambiguous_directions, 1);
+  EXPECT_EQ(nearest->V_u.rows(), 2);
+
+  const auto agreeing = icpPointToPlane(source, target, truth, checked);
+  ASSERT_TRUE(agreeing.ok()) << agreeing.error().message;
+  EXPECT_EQ(agreeing->ambiguous_directions, 0);
+  ASSERT_EQ(agreeing->V_u.rows(), 3);
+  EXPECT_LT(geometry::translationDistance(agreeing->T_target_source, truth), 0.01);
+}
+
 // A thin plate: the target saw its near face (x = 5, from -x) and its far face 0.12 m behind (from
 // +x), the source the near face only, with a wall that pins y and yaw; the estimate starts 0.1 m off
 // across the plate, so each near-face source point's nearest target point lies on the far face.
