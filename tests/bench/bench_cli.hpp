@@ -1,6 +1,8 @@
 #pragma once
 // What the vog-bench subcommands share: command-line parsing with CLI11, the API benches' secret.
 
+#include "vog/geometry/sonar.hpp"
+#include "vog/slam/mapping_pipeline.hpp"
 #include "vog/slam/pose_graph.hpp"
 
 #include <CLI/CLI.hpp>
@@ -31,6 +33,40 @@ inline void addSparseBackendOption(CLI::App& app, slam::SparseBackend& field, co
   app.add_option("--sparse-backend", field, description)
       ->transform(CLI::CheckedTransformer(std::map<std::string, slam::SparseBackend>{
           {"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}}));
+}
+
+// The loop closer's acceptance and checks (--lc-*), shared by the benches that run a MappingPipeline.
+inline void addLoopClosureOptions(CLI::App& app, slam::MappingPipelineConfig& mc) {
+  slam::LoopCloserConfig& lc = mc.loop_closer;
+  const auto degrees = [](double& field_rad) {
+    return [&field_rad](double deg) { field_rad = geometry::deg2rad(deg); };
+  };
+  app.add_option("--lc-max-fitness", lc.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
+  app.add_option("--lc-min-overlap", lc.min_overlap_fraction,
+                 "loop closures: share of the source cloud with a correspondence at the result");
+  app.add_option_function<double>("--lc-max-yaw-disagreement-deg", degrees(lc.max_yaw_disagreement_rad),
+                                  "loop closures: largest yaw difference between a registration and its prior, deg");
+  app.add_option_function<double>("--lc-max-heading-deg", degrees(lc.max_heading_difference_rad),
+                                  "loop closures: viewing-direction gate, deg");
+  app.add_option_function<double>(
+      "--lc-max-normal-angle-deg", degrees(lc.point_to_plane.max_normal_angle_rad),
+      "loop closures: largest angle between corresponding points' normals, deg (default 45; 180: no check)");
+  app.add_option("--lc-normal-search-neighbours", lc.point_to_plane.normal_search_neighbours,
+                 "loop closures: with the normals check, the nearest agreeing of this many nearest target points (1: "
+                 "the nearest only)");
+  app.add_option("--lc-probe-steps", lc.point_to_plane.probe_steps,
+                 "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default; 3 measured)");
+  app.add_option("--lc-probe-min-cost-points", lc.point_to_plane.min_probe_cost_points,
+                 "loop closures: correspondences' worth of cost every probe shift must add");
+  app.add_option("--lc-max-registrations", lc.max_registrations,
+                 "loop closures: at most this many registrations per new submap, the nearest candidates (0: all)")
+      ->check(CLI::Range(0, 100'000));
+  app.add_option(
+      "--lc-consistency", mc.consistency_confidence,
+      "loop closures: confidence of the consistency check before insertion (0: off, the default; 0.999 measured)");
+  app.add_option("--lc-recheck", mc.consistency_recheck,
+                 "loop closures: check every accepted closure again after each solve, switching the inconsistent "
+                 "off (1/0; needs --lc-consistency)");
 }
 
 }  // namespace vog::bench

@@ -293,34 +293,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                  "vog-lc: revisit an old view after this long without an anchoring closure, s (0: off)");
   app.add_option("--revisit-span-s", revisit_config.anchor_span_s,
                  "vog-lc: a closure anchors when its submaps started this far apart, s");
-  app.add_option("--lc-max-fitness", mc.loop_closer.acceptance.max_fitness_m2, "loop closures: ICP fitness bound, m^2");
-  app.add_option("--lc-probe-steps", mc.loop_closer.point_to_plane.probe_steps,
-                 "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default; 3 measured)");
-  app.add_option("--lc-probe-min-cost-points", mc.loop_closer.point_to_plane.min_probe_cost_points,
-                 "loop closures: correspondences' worth of cost every probe shift must add");
-  app.add_option(
-      "--lc-consistency", mc.consistency_confidence,
-      "loop closures: confidence of the consistency check before insertion (0: off, the default; 0.999 measured)");
-  app.add_option("--lc-recheck", mc.consistency_recheck,
-                 "loop closures: check every accepted closure again after each solve, switching the inconsistent "
-                 "off (1/0; needs --lc-consistency)");
-  app.add_option_function<double>(
-      "--lc-max-normal-angle-deg",
-      [&](double deg) { mc.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: largest angle between corresponding points' normals, deg (default 45; 180: no check)");
-  app.add_option("--lc-normal-search-neighbours", mc.loop_closer.point_to_plane.normal_search_neighbours,
-                 "loop closures: with the normals check, the nearest agreeing of this many nearest target points (1: "
-                 "the nearest only)");
-  app.add_option("--lc-min-overlap", mc.loop_closer.min_overlap_fraction,
-                 "loop closures: share of the source cloud with a correspondence at the result");
-  app.add_option_function<double>(
-      "--lc-max-yaw-disagreement-deg",
-      [&](double deg) { mc.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: largest yaw difference between a registration and its prior, deg");
-  app.add_option_function<double>(
-      "--lc-max-heading-deg",
-      [&](double deg) { mc.loop_closer.max_heading_difference_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: viewing-direction gate, deg");
+  vog::bench::addLoopClosureOptions(app, mc);
   app.add_option("--graph-function-tolerance", mc.graph.function_tolerance,
                  "mapping: the pose graph solver's relative cost change that ends it");
   app.add_option("--graph-max-iterations", mc.graph.max_iterations,
@@ -330,9 +303,6 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
                                      "mapping: the pose graph's sparse Cholesky, eigen or suitesparse");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
-  app.add_option("--lc-max-registrations", mc.loop_closer.max_registrations,
-                 "loop closures: at most this many registrations per new submap, the nearest candidates (0: all)")
-      ->check(CLI::Range(0, 100'000));
   app.add_option("--local-optimization-nodes", mc.local_optimization_nodes,
                  "mapping: in a graph of more nodes, a solve frees only this many around the new submap (0: never)")
       ->check(CLI::Range(0, 1'000'000));

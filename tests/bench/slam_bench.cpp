@@ -165,20 +165,7 @@ VOG_BENCH_COMMAND(slam, "Submap SLAM evaluation (thesis Table 4.3): reconstructi
   app.add_option("--noise-scale", noise_scale, "factor on the odometry noise variances")->check(CLI::Range(0.0, 1e3));
   app.add_option("--max-scans", max_scans, "scans per submap (thesis Table 4.2: 100)")->check(CLI::Range(2, 100000));
   slam::MappingPipelineConfig base;  // library defaults; the options below override a few
-  app.add_option("--lc-max-fitness", base.loop_closer.acceptance.max_fitness_m2,
-                 "loop closures: ICP fitness bound, m^2");
-  app.add_option_function<double>(
-      "--lc-max-yaw-disagreement-deg",
-      [&](double deg) { base.loop_closer.max_yaw_disagreement_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: largest yaw difference between a registration and its prior, deg");
-  app.add_option("--lc-probe-steps", base.loop_closer.point_to_plane.probe_steps,
-                 "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default)");
-  app.add_option("--lc-consistency", base.consistency_confidence,
-                 "loop closures: confidence of the consistency check before insertion (0: off, the default)");
-  app.add_option_function<double>(
-      "--lc-max-normal-angle-deg",
-      [&](double deg) { base.loop_closer.point_to_plane.max_normal_angle_rad = vog::geometry::deg2rad(deg); },
-      "loop closures: largest angle between corresponding points' normals, deg (default 45; 180: no check)");
+  vog::bench::addLoopClosureOptions(app, base);
   app.add_flag("--json", json, "print JSON (the only output format)");
   if (const auto exit_code = vog::bench::parseArgs(app, args)) return *exit_code;
   auto fail = [](const std::string& message) {

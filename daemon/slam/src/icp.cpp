@@ -191,10 +191,10 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
 // The target point a source point at tp (normal tn there) pairs with within c, by the registration's
 // rule, and the truncated point-to-plane cost min(r^2, c^2) against it; nothing when it pairs with none
 // (its cost is then c^2).
-std::optional<std::pair<std::size_t, double>> truncatedCost(Correspondences& correspondences,
-                                                            const geometry::PointCloud& target,
-                                                            const Eigen::Vector3d& tp, const Eigen::Vector3d& tn,
-                                                            double c) {
+std::optional<std::pair<std::size_t, double>> pairedTruncatedCost(Correspondences& correspondences,
+                                                                  const geometry::PointCloud& target,
+                                                                  const Eigen::Vector3d& tp, const Eigen::Vector3d& tn,
+                                                                  double c) {
   const auto pair = correspondences.find(tp, tn, c * c);
   if (!pair) return std::nullopt;
   const double r = target.normals[pair->first].dot(tp - target.points[pair->first]);
@@ -216,7 +216,7 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
   std::vector<double> kept_costs;             // at the result
   for (std::size_t i = 0; i < source.points.size(); ++i) {
     const Eigen::Vector3d tp = T * source.points[i];
-    const auto paired = truncatedCost(correspondences, target, tp, turnedNormal(source, i, T, normals), c);
+    const auto paired = pairedTruncatedCost(correspondences, target, tp, turnedNormal(source, i, T, normals), c);
     if (!paired) continue;
     kept.push_back(i);
     kept_normals.push_back(target.normals[paired->first]);
@@ -231,7 +231,8 @@ void dropAmbiguousDirections(IcpResult& out, const geometry::PointCloud& source,
     for (std::size_t j = 0; j < kept.size(); ++j) {
       const Eigen::Vector3d tp = Ts * source.points[kept[j]];
       if (sliding[j] && target_known && !target_known(tp)) continue;
-      const auto paired = truncatedCost(correspondences, target, tp, turnedNormal(source, kept[j], Ts, normals), c);
+      const auto paired =
+          pairedTruncatedCost(correspondences, target, tp, turnedNormal(source, kept[j], Ts, normals), c);
       sum += (paired ? paired->second : c * c) - kept_costs[j];
     }
     return sum;

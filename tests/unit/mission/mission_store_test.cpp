@@ -28,15 +28,16 @@ map::GridConfig gridConfig() {
 }
 
 std::shared_ptr<const map::LocalGrid> smallGrid(int seed) {
+  // A plane y = const beside the base (y > 0 for every seed, so the base is on one side of it), seen
+  // from the other side (+y): the cloud's normals point away from the base, which they would not
+  // without the origins.
+  const double y = 0.3 * (seed + 1);
   auto tree = std::make_unique<octomap::OcTree>(gridConfig().resolution_m);
   for (int i = 0; i < 30; ++i) {
-    tree->updateNode(octomap::point3d(0.2f * static_cast<float>(i % 6), 0.3f * static_cast<float>(seed),
-                                      0.1f * static_cast<float>(i / 6)),
-                     i % 3 != 0);
+    tree->updateNode(
+        octomap::point3d(0.2f * static_cast<float>(i % 6), static_cast<float>(y), 0.1f * static_cast<float>(i / 6)),
+        i % 3 != 0);
   }
-  // Seen from the side away from the base (+y): the cloud's normals point away from the base, which
-  // they would not without the origins.
-  const double y = 0.3 * seed;
   auto grid = map::LocalGrid::fromTree(gridConfig(), std::move(tree),
                                        {Eigen::Vector3d(0.5, y + 3.0, 0.2), Eigen::Vector3d(-0.5, y + 2.0, 0.0)});
   EXPECT_TRUE(grid.ok());
