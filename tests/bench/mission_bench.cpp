@@ -311,6 +311,13 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       ->check(CLI::Range(1, 1'000'000));
   app.add_flag("--same-run-global-tree", same_run_global_tree,
                "vog / vog-lc: also score the run's scans fused into one global tree at raw odometry");
+  map::MergeConfig merge_config;
+  app.add_option("--remerge-translation-m", merge_config.remerge_translation_m,
+                 "merge: a submap is re-merged when its pose moved more than this since it was merged, m")
+      ->check(CLI::Range(0.0, 10.0));
+  app.add_option_function<double>(
+      "--remerge-rotation-deg", [&](double deg) { merge_config.remerge_rotation_rad = vog::geometry::deg2rad(deg); },
+      "merge: ... or turned more than this, deg");
   app.add_option("--path", path_name,
                  "lawnmower: a scripted survey, repeated until the submap budget is spent, instead of the exploration");
   app.add_option("--lane-spacing", lanes.lane_spacing_m, "--path lawnmower: distance between lanes, m")
@@ -394,7 +401,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   slam::MappingPipeline& pipeline = **pipeline_r;
   const map::GridConfig& grid_config = mc.builder.grid;
   const vog::geometry::SonarFan& fan = mc.builder.fan;
-  auto worker_r = map::MergeWorker::create(grid_config, map::MergeConfig{});
+  auto worker_r = map::MergeWorker::create(grid_config, merge_config);
   if (!worker_r) return fail(worker_r.error().message);
   map::MergeWorker& worker = **worker_r;
   // The snapshot published at the last synchronisation point (see the header comment).

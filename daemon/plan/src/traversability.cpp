@@ -160,29 +160,36 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
   return g;
 }
 
-void TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Block* block) {
+bool TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Block* block) {
   KeyBox b;
   b.min = origin;
   b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
   const KeyBox clipped = intersect(b, grid_);
-  if (clipped.empty()) return;
+  if (clipped.empty()) return false;
+  bool changed = false;
   VoxelKey k;
   for (k.z() = clipped.min.z(); k.z() <= clipped.max.z(); ++k.z())
-    for (k.y() = clipped.min.y(); k.y() <= clipped.max.y(); ++k.y())
+    for (k.y() = clipped.min.y(); k.y() <= clipped.max.y(); ++k.y()) {
+      std::uint8_t* row = status_.data() + indexOf(VoxelKey(clipped.min.x(), k.y(), k.z()));
+      const int block_row =
+          ((k.z() - origin.z()) << (2 * MergedMap::kBlockBits)) | ((k.y() - origin.y()) << MergedMap::kBlockBits);
       for (k.x() = clipped.min.x(); k.x() <= clipped.max.x(); ++k.x()) {
         map::Occupancy status = map::Occupancy::kUnknown;
         if (block != nullptr) {
-          const VoxelKey d = k - origin;
-          const auto i = static_cast<std::size_t>((d.z() << (2 * MergedMap::kBlockBits)) |
-                                                  (d.y() << MergedMap::kBlockBits) | d.x());
+          const auto i = static_cast<std::size_t>(block_row + (k.x() - origin.x()));
           // The classification MergedMap::at makes: clamp, then threshold (thesis Eq. 3.4-3.5).
           if (block->count(i) != 0) status = bounds_.classify(bounds_.clamp(block->sum(i)));
         }
         if (status == map::Occupancy::kUnknown && assumedFree(k)) status = map::Occupancy::kFree;
-        status_[indexOf(k)] = static_cast<std::uint8_t>(status);
+        std::uint8_t& out = row[k.x() - clipped.min.x()];
+        changed = changed || out != static_cast<std::uint8_t>(status);
+        out = static_cast<std::uint8_t>(status);
       }
+    }
+  // A contact inside reads as changed when the map says free; it stays occupied (a needless recompute).
   for (const VoxelKey& c : contacts_)
     if (clipped.contains(c)) status_[indexOf(c)] = static_cast<std::uint8_t>(map::Occupancy::kOccupied);
+  return changed;
 }
 
 void TraversabilityGrid::addContact(const Eigen::Vector3d& p_world) {
@@ -360,40 +367,63 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
     b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
     return !intersect(b, grid_).empty();
   };
-  // Removed first: a block removed and created again since the grid's version is in both lists, and
-  // its current content must win.
+  // Safe flags depend only on the statuses: a block whose statuses all stay (a loop closure re-merges
+  // most blocks with new sums and the same statuses) needs no recompute. A block removed and created
+  // again since the grid's version is in both lists: only its current content is read.
+  const auto changed = newer.blocksChangedSince(map_version_);
+  const auto lexicographic = [](const VoxelKey& a, const VoxelKey& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::vector<VoxelKey> changed_origins;
+  changed_origins.reserve(changed.size());
+  for (const auto& entry : changed) changed_origins.push_back(entry.first);
+  std::sort(changed_origins.begin(), changed_origins.end(), lexicographic);
   for (const VoxelKey& origin : newer.blocksRemovedSince(map_version_)) {
-    if (!touchesGrid(origin)) continue;
-    readBlock(origin, nullptr);
-    markAround(origin);
+    if (!touchesGrid(origin) ||
+        std::binary_search(changed_origins.begin(), changed_origins.end(), origin, lexicographic))
+      continue;
+    if (readBlock(origin, nullptr)) markAround(origin);
     ++stats.blocks_read;
   }
-  for (const auto& [origin, block] : newer.blocksChangedSince(map_version_)) {
+  for (const auto& [origin, block] : changed) {
     if (!touchesGrid(origin)) continue;
-    readBlock(origin, block.get());
-    markAround(origin);
+    if (readBlock(origin, block.get())) markAround(origin);
     ++stats.blocks_read;
   }
-  // Recompute the bounding box of the dirty blocks in one pass: the separable filter's margins are
-  // paid once instead of per block, and the cost never exceeds a rebuild.
-  KeyBox dirty_box;
+  // Recompute the dirty blocks in runs along the grid's longest axis: each run's bounding box in one
+  // pass (the separable filter's margins paid once per run instead of per block), runs split where a
+  // slice across that axis holds no dirty block, so changes at the two ends of a long box do not make
+  // one box spanning it. The runs are disjoint: the cost never exceeds a rebuild.
+  int axis = 0;
+  for (int i = 1; i < 3; ++i)
+    if (nb[i] > nb[axis]) axis = i;
+  KeyBox run;
+  auto flush = [&] {
+    if (run.empty()) return;
+    recompute(run);
+    const VoxelKey blocks = (run.max - run.min) / MergedMap::kBlockSide + VoxelKey::Ones();
+    stats.blocks_recomputed += blocks.x() * blocks.y() * blocks.z();
+    run = KeyBox{};
+  };
   VoxelKey k;
-  for (k.z() = 0; k.z() < nb.z(); ++k.z())
-    for (k.y() = 0; k.y() < nb.y(); ++k.y())
-      for (k.x() = 0; k.x() < nb.x(); ++k.x()) {
+  for (int slice = 0; slice < nb[axis]; ++slice) {
+    bool any = false;
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    k[axis] = slice;
+    for (k[a2] = 0; k[a2] < nb[a2]; ++k[a2])
+      for (k[a1] = 0; k[a1] < nb[a1]; ++k[a1]) {
         if (dirty[static_cast<std::size_t>(k.x()) +
                   static_cast<std::size_t>(nb.x()) *
                       (static_cast<std::size_t>(k.y()) +
                        static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(k.z()))] == 0)
           continue;
         const VoxelKey lo = (block_min + k) * MergedMap::kBlockSide;
-        dirty_box.extend(lo, lo + VoxelKey::Constant(MergedMap::kBlockSide - 1));
+        run.extend(lo, lo + VoxelKey::Constant(MergedMap::kBlockSide - 1));
+        any = true;
       }
-  if (!dirty_box.empty()) {
-    recompute(dirty_box);
-    const VoxelKey blocks = (dirty_box.max - dirty_box.min) / MergedMap::kBlockSide + VoxelKey::Ones();
-    stats.blocks_recomputed = blocks.x() * blocks.y() * blocks.z();
+    if (!any) flush();
   }
+  flush();
   map_version_ = newer.version();
   return stats;
 }

@@ -126,6 +126,50 @@ TEST_F(PierTraversability, IncrementalUpdateEqualsRebuild) {
   EXPECT_EQ(grid.safeCount(), 0u);
 }
 
+// A submap merged out and back in at the same pose gives every block it touches a new version and the
+// same sums: the update reads them and recomputes no safe flag (as after a loop closure that moves
+// submaps without changing what is free).
+TEST_F(PierTraversability, ReMergeWithTheSameStatusesRecomputesNothing) {
+  auto writer = merged(0, entries_->size());
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), kPierBox, Footprint::box(kCollisionBox)).value();
+  ASSERT_TRUE(writer->remove((*entries_)[3].id).ok());
+  ASSERT_TRUE(writer->add((*entries_)[3]).ok());
+  const auto snap = writer->snapshot();
+  const auto stats = grid.update(*snap).value();
+  EXPECT_GT(stats.blocks_read, 100);
+  EXPECT_EQ(stats.blocks_recomputed, 0);
+  const auto scratch = TraversabilityGrid::build(*snap, kPierBox, Footprint::box(kCollisionBox)).value();
+  EXPECT_TRUE(grid.sameFlags(scratch));
+}
+
+// Changes at both ends of a long box are recomputed around each end, not in one box spanning the
+// length between them, and the flags equal a rebuild's.
+TEST(Traversability, ChangesAtBothEndsOfALongBoxAreRecomputedApart) {
+  const map::GridConfig config;
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-12.0, -1.5, -2.5), Eigen::Vector3d(12.0, 1.5, -0.5));
+  auto all = [](const map::VoxelKey&) { return true; };
+  const auto room = [&](double x0, double x1) {
+    return test_fixtures::carvedGrid(
+        config, Eigen::AlignedBox3d(Eigen::Vector3d(x0, -1.4, -2.4), Eigen::Vector3d(x1, 1.4, -0.6)), all);
+  };
+  auto writer = test_fixtures::mergedOf(config, {room(-11.5, -8.0), room(8.0, 11.5)});
+  auto grid = TraversabilityGrid::build(*writer->snapshot(), box, Footprint::box(kCollisionBox)).value();
+  // Each end's room grows by a carved room beside it.
+  ASSERT_TRUE(writer->add(test_fixtures::entryAtIdentity(2, room(-8.5, -6.0))).ok());
+  ASSERT_TRUE(writer->add(test_fixtures::entryAtIdentity(3, room(6.0, 8.5))).ok());
+  const auto snap = writer->snapshot();
+  const auto stats = grid.update(*snap).value();
+  const Eigen::Vector3i blocks =
+      (grid.gridSize().array() + map::MergedMap::kBlockSide - 1) / map::MergedMap::kBlockSide;
+  const int grid_blocks = blocks.x() * blocks.y() * blocks.z();
+  EXPECT_GT(stats.blocks_recomputed, 0);
+  // One box around both ends spans about 17 of the grid's 25 m; the two runs about 2 x 4 m.
+  EXPECT_LT(stats.blocks_recomputed, grid_blocks / 2) << "of " << grid_blocks;
+  const auto scratch = TraversabilityGrid::build(*snap, box, Footprint::box(kCollisionBox)).value();
+  EXPECT_TRUE(grid.sameFlags(scratch));
+  EXPECT_GT(grid.safeCount(), 0u);
+}
+
 // The any-heading footprint: a vertical cylinder (1.41 m across and 0.5 m high, the 1 x 1 x 0.5 m box
 // turning on the spot, grown by 0.3 m of clearance).
 const Footprint kCylinder = Footprint::cylinder(std::sqrt(2.0) + 0.6, 0.5);

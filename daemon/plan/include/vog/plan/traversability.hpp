@@ -22,8 +22,9 @@
 //
 // Lifecycle: built from one snapshot; update() catches up with a newer snapshot of the same MergedMap
 // writer by re-reading only the blocks changed or removed since the version it reflects and
-// recomputing the safe flags in the bounding box of those blocks dilated by r (the result equals a
-// rebuild from the newer snapshot; the cost never exceeds one). Contacts (addContact) are voxels the
+// recomputing the safe flags around those of them whose statuses changed, dilated by r, in runs along
+// the grid's longest axis (the result equals a rebuild from the newer snapshot; the cost never
+// exceeds one). Contacts (addContact) are voxels the
 // vehicle ran into although the map shows them free: they count as occupied until the grid is
 // rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe:
 // one planner owns one grid.
@@ -62,7 +63,7 @@ struct AssumedFree {
 struct TraversabilityUpdate {
   bool rebuilt = false;       // the snapshot was not a descendant: rebuilt from scratch
   int blocks_read = 0;        // changed or removed map blocks that touch the grid
-  int blocks_recomputed = 0;  // 8^3 blocks in the box of recomputed safe flags
+  int blocks_recomputed = 0;  // 8^3 blocks in the boxes of recomputed safe flags
 };
 
 class TraversabilityGrid {
@@ -142,8 +143,9 @@ class TraversabilityGrid {
                (static_cast<std::size_t>(d.y()) +
                 static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(d.z()));
   }
-  // Copies the status of one map block (nullptr: entirely unknown) into status_.
-  void readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
+  // Copies the status of one map block (nullptr: entirely unknown) into status_; true when a status
+  // in the grid changed.
+  bool readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
   // Recomputes safe_ inside `region` (clipped to the grid) from status_.
   void recompute(map::KeyBox region);
 
