@@ -397,6 +397,7 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
   int axis = 0;
   for (int i = 1; i < 3; ++i)
     if (nb[i] > nb[axis]) axis = i;
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
   KeyBox run;
   auto flush = [&] {
     if (run.empty()) return;
@@ -408,7 +409,6 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
   VoxelKey k;
   for (int slice = 0; slice < nb[axis]; ++slice) {
     bool any = false;
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     k[axis] = slice;
     for (k[a2] = 0; k[a2] < nb[a2]; ++k[a2])
       for (k[a1] = 0; k[a1] < nb[a1]; ++k[a1]) {

@@ -24,10 +24,9 @@
 // writer by re-reading only the blocks changed or removed since the version it reflects and
 // recomputing the safe flags around those of them whose statuses changed, dilated by r, in runs along
 // the grid's longest axis (the result equals a rebuild from the newer snapshot; the cost never
-// exceeds one). Contacts (addContact) are voxels the
-// vehicle ran into although the map shows them free: they count as occupied until the grid is
-// rebuilt, whatever later snapshots say. It holds no reference to any snapshot. Not thread-safe:
-// one planner owns one grid.
+// exceeds one). Contacts (addContact) are voxels the vehicle ran into although the map shows them
+// free: they count as occupied until the grid is rebuilt, whatever later snapshots say. It holds no
+// reference to any snapshot. Not thread-safe: one planner owns one grid.
 
 #include "vog/core/result.hpp"
 #include "vog/map/merged_map.hpp"
