@@ -368,24 +368,14 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
     return !intersect(b, grid_).empty();
   };
   // Safe flags depend only on the statuses: a block whose statuses all stay (a loop closure re-merges
-  // most blocks with new sums and the same statuses) needs no recompute. A block removed and created
-  // again since the grid's version is in both lists: only its current content is read.
-  const auto changed = newer.blocksChangedSince(map_version_);
-  const auto lexicographic = [](const VoxelKey& a, const VoxelKey& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  };
-  std::vector<VoxelKey> changed_origins;
-  changed_origins.reserve(changed.size());
-  for (const auto& entry : changed) changed_origins.push_back(entry.first);
-  std::sort(changed_origins.begin(), changed_origins.end(), lexicographic);
+  // most blocks with new sums and the same statuses) needs no recompute. A block created again after
+  // its removal is only in the changed list (the map drops its removal record).
   for (const VoxelKey& origin : newer.blocksRemovedSince(map_version_)) {
-    if (!touchesGrid(origin) ||
-        std::binary_search(changed_origins.begin(), changed_origins.end(), origin, lexicographic))
-      continue;
+    if (!touchesGrid(origin)) continue;
     if (readBlock(origin, nullptr)) markAround(origin);
     ++stats.blocks_read;
   }
-  for (const auto& [origin, block] : changed) {
+  for (const auto& [origin, block] : newer.blocksChangedSince(map_version_)) {
     if (!touchesGrid(origin)) continue;
     if (readBlock(origin, block.get())) markAround(origin);
     ++stats.blocks_read;
