@@ -54,6 +54,12 @@ inline void addLoopClosureOptions(CLI::App& app, slam::MappingPipelineConfig& mc
   app.add_option("--lc-normal-search-neighbours", lc.point_to_plane.normal_search_neighbours,
                  "loop closures: with the normals check, the nearest agreeing of this many nearest target points (1: "
                  "the nearest only)");
+  app.add_option("--lc-noise-floor", lc.point_to_plane.normal_noise_floor,
+                 "loop closures: take the information the normals' noise adds along a direction off it before the "
+                 "well-conditioned rule (1/0)");
+  app.add_option("--lc-odometry-yaw-sigmas", lc.odometry_yaw_sigmas,
+                 "loop closures: largest difference between a registration's yaw and the odometry's, in standard "
+                 "deviations of the heading drift between the two submaps and the registration's 0.5 deg (0: off)");
   app.add_option("--lc-probe-steps", lc.point_to_plane.probe_steps,
                  "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default; 3 measured)");
   app.add_option("--lc-probe-min-cost-points", lc.point_to_plane.min_probe_cost_points,

@@ -93,6 +93,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("p2p_max_fitness_m2", lc.p2p_max_fitness_m2, 1e-6, 10.0);
   l.number("max_direction_stddev", lc.point_to_plane.max_direction_stddev, 1e-6, 10.0);
   l.number("sigma_point_m", lc.point_to_plane.sigma_point_m, 1e-4, 10.0);
+  l.boolean("normal_noise_floor", lc.point_to_plane.normal_noise_floor);
   l.number("probe_max_shift_m", lc.point_to_plane.probe_max_shift_m, 0.01, 10.0);
   l.integer("probe_steps", lc.point_to_plane.probe_steps, 0, 100);
   l.number("min_probe_cost_points", lc.point_to_plane.min_probe_cost_points, 0.0, 1e6);
@@ -110,6 +111,9 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.number("p2p_min_overlap_fraction", lc.p2p_min_overlap_fraction, 0.0, 1.0);
   l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);
   l.number("odometry_cov_y_m2_per_s", lc.acceptance.odometry_cov_y_m2_per_s, 1e-9, 10.0);
+  l.number("odometry_yaw_sigmas", lc.odometry_yaw_sigmas, 0.0, 100.0);
+  l.number("odometry_cov_yaw_rad2_per_s", lc.odometry_cov_yaw_rad2_per_s, 0.0, 10.0);
+  l.degrees("registration_yaw_stddev_deg", lc.registration_yaw_stddev_rad, 1e-3, 45.0);
   l.number("robust_loss_scale", c.graph.loop_closure_loss_scale, 1e-3, 1e3);
   l.number("consistency_confidence", c.consistency_confidence, 0.0, 0.999999);
   l.number("consistency_floor_m", c.consistency_floor_m, 0.0, 10.0);

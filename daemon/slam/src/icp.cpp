@@ -68,6 +68,18 @@ struct Linearisation {
   // Of those, the correspondences within the inlier bound and their squared distances.
   std::size_t n_inliers = 0;
   double sum_sq_inliers = 0.0;
+  // With the noise floor (icp.hpp): over the correspondences, sum D^T (I - n n^T) D, where D (3 x m)
+  // is the source point's motion per unit step of each component and n the target point's normal
+  // (m x m; empty without the floor), and the sum of |n_target - n_source|^2.
+  Eigen::MatrixXd sliding;
+  double sum_normal_gap_sq = 0.0;
+  // The information along a unit v that the normals' noise alone gives: sigma_n^2 v^T sliding v, with
+  // sigma_n^2 (per tangent axis of one normal) a quarter of the mean squared gap between the
+  // corresponding normals, each pair carrying two normals' noise on two axes.
+  double noiseInformation(const Eigen::VectorXd& v) const {
+    if (sliding.size() == 0 || n == 0) return 0.0;
+    return sum_normal_gap_sq / (4.0 * static_cast<double>(n)) * v.dot(sliding * v);
+  }
 };
 
 // Normals agreement: a correspondence counts only when the source point's normal, turned into the
@@ -122,13 +134,16 @@ class Correspondences {
 
 Linearisation linearisePointToPlane(const geometry::PointCloud& source, const geometry::PointCloud& target,
                                     const NearestNeighbours& nn, const Vector6d& x, const std::vector<int>& comps,
-                                    double max_dist_m, double inlier_dist_m, const NormalsCheck& check) {
+                                    double max_dist_m, double inlier_dist_m, const NormalsCheck& check,
+                                    bool noise_floor = false) {
   const geometry::Pose3 T = fromXyzRpy(x);
   const auto dR = rotationDerivatives(x[kRoll], x[kPitch], x[kYaw]);
   const auto m = static_cast<Eigen::Index>(comps.size());
   Linearisation lin;
   lin.AtA = Eigen::MatrixXd::Zero(m, m);
   lin.Atb = Eigen::VectorXd::Zero(m);
+  if (noise_floor) lin.sliding = Eigen::MatrixXd::Zero(m, m);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> D(3, m);
   const double max_dist_sq = max_dist_m * max_dist_m;
   Eigen::Matrix<double, 1, 6> J_full;
   Eigen::RowVectorXd J(m);
@@ -146,6 +161,15 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
     J_full.head<3>() = n.transpose();
     for (int k = 0; k < 3; ++k) J_full(3 + k) = n.dot(dR[static_cast<std::size_t>(k)] * p);
     for (Eigen::Index c = 0; c < m; ++c) J(c) = J_full(comps[static_cast<std::size_t>(c)]);
+    if (noise_floor) {
+      for (Eigen::Index c = 0; c < m; ++c) {
+        const int k = comps[static_cast<std::size_t>(c)];
+        D.col(c) = k < 3 ? Eigen::Vector3d::Unit(k) : Eigen::Vector3d(dR[static_cast<std::size_t>(k - 3)] * p);
+      }
+      const Eigen::Matrix<double, 3, Eigen::Dynamic> tangential = D - n * (n.transpose() * D);
+      lin.sliding.noalias() += tangential.transpose() * tangential;
+      lin.sum_normal_gap_sq += (n - tn).squaredNorm();
+    }
     lin.AtA.noalias() += J.transpose() * J;
     lin.Atb.noalias() -= J.transpose() * r;
     ++lin.n;
@@ -157,9 +181,16 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
   return lin;
 }
 
-// Fills information, covariance, V_u and eigenvalues from A^T A at the result.
-void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vector<int>& comps, double sigma,
+// Whether eigenvector v (eigenvalue lambda) of lin's A^T A is well-conditioned: lambda, less the
+// information the normals' noise alone gives along v (when lin has the noise floor), reaches lambda_min.
+bool wellConditioned(const Linearisation& lin, const Eigen::VectorXd& v, double lambda, double lambda_min) {
+  return lambda > 0.0 && lambda - lin.noiseInformation(v) >= lambda_min;
+}
+
+// Fills information, covariance, V_u and eigenvalues from lin's A^T A at the result.
+void fillConditioning(IcpResult& out, const Linearisation& lin, const std::vector<int>& comps, double sigma,
                       double lambda_min) {
+  const Eigen::MatrixXd& AtA = lin.AtA;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(AtA);
   const auto m = static_cast<Eigen::Index>(comps.size());
   out.eigenvalues = eig.eigenvalues();
@@ -172,7 +203,7 @@ void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const std::vec
   }
   std::vector<Eigen::Index> good;
   for (Eigen::Index i = m - 1; i >= 0; --i) {  // decreasing eigenvalue
-    if (eig.eigenvalues()(i) >= lambda_min && eig.eigenvalues()(i) > 0.0) good.push_back(i);
+    if (wellConditioned(lin, eig.eigenvectors().col(i), eig.eigenvalues()(i), lambda_min)) good.push_back(i);
   }
   out.V_u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(good.size()), 6);
   out.eigenvalues_u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(good.size()));
@@ -355,6 +386,8 @@ Status PointToPlaneConfig::validate() const {
     os << "max_normal_angle_rad must be in (0, pi], got " << max_normal_angle_rad;
   else if (normal_search_neighbours < 1 || normal_search_neighbours > 64)
     os << "normal_search_neighbours must be in [1, 64], got " << normal_search_neighbours;
+  else if (normal_noise_floor && !(max_normal_angle_rad < std::numbers::pi))
+    os << "normal_noise_floor needs the normals check (max_normal_angle_rad below pi)";
   else if (min_points < 6)
     os << "min_points must be >= 6, got " << min_points;
   else if (min_correspondences < 6)
@@ -462,7 +495,9 @@ Result<IcpResult> icpPointToPoint2d(const geometry::PointCloud& source, const ge
   if (n < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
   out.n_correspondences = n;
   out.fitness_m2 = sum_sq / static_cast<double>(n);
-  fillConditioning(out, AtA, {kX, kY, kYaw}, config.sigma_point_m, 0.0);
+  Linearisation lin;
+  lin.AtA = AtA;
+  fillConditioning(out, lin, {kX, kY, kYaw}, config.sigma_point_m, 0.0);
   return out;
 }
 
@@ -479,6 +514,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   const std::vector<int> comps = estimatedComponents(config.dofs);
   const double lambda_wc =
       (config.sigma_point_m / config.max_direction_stddev) * (config.sigma_point_m / config.max_direction_stddev);
+  const bool noise_floor = config.degeneracy_aware && config.normal_noise_floor;
   Vector6d x = toXyzRpy(T_target_source_init);
   IcpResult out;
   double max_distance_m = config.max_correspondence_distance_m;
@@ -487,7 +523,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     if (it > 1) {
       max_distance_m = std::max(config.min_correspondence_distance_m, max_distance_m * config.correspondence_shrink);
     }
-    const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, max_distance_m, 0.0, normals);
+    const Linearisation lin =
+        linearisePointToPlane(source, target, nn, x, comps, max_distance_m, 0.0, normals, noise_floor);
     if (lin.n < config.min_correspondences) {
       std::ostringstream os;
       os << "icp: only " << lin.n << " correspondences within " << max_distance_m << " m at iteration " << it
@@ -503,8 +540,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     Eigen::VectorXd step = Eigen::VectorXd::Zero(lin.AtA.rows());
     for (Eigen::Index i = 0; i < eig.eigenvalues().size(); ++i) {
       const double lambda = eig.eigenvalues()(i);
-      if (lambda < lambda_min || !(lambda > 0.0)) continue;
       const Eigen::VectorXd v = eig.eigenvectors().col(i);
+      if (!wellConditioned(lin, v, lambda, lambda_min)) continue;
       step += v * (v.dot(lin.Atb) / lambda);
     }
     for (std::size_t c = 0; c < comps.size(); ++c) x(comps[c]) += step(static_cast<Eigen::Index>(c));
@@ -521,12 +558,12 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   // less: vog-bench mission, pilings / propeller mean coverage 0.97 / 0.85 against 1.00 / 0.89, both
   // without the planner's recovery move); fitness and correspondences within the final bound.
   const Linearisation lin = linearisePointToPlane(source, target, nn, x, comps, config.max_correspondence_distance_m,
-                                                  config.min_correspondence_distance_m, normals);
+                                                  config.min_correspondence_distance_m, normals, noise_floor);
   if (lin.n_inliers < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
   out.n_correspondences = lin.n_inliers;
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
-  fillConditioning(out, lin.AtA, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
+  fillConditioning(out, lin, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
   if (config.degeneracy_aware) dropAmbiguousDirections(out, source, target, nn, x, comps, config, target_known);
   return out;
 }

@@ -75,6 +75,16 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: p2p_min_overlap_fraction = " + std::to_string(p2p_min_overlap_fraction) +
                  " must be in [0, 1]"};
   }
+  if (!(odometry_yaw_sigmas >= 0.0) || !std::isfinite(odometry_yaw_sigmas)) {
+    return Error{"loop closer config: odometry_yaw_sigmas = " + std::to_string(odometry_yaw_sigmas) +
+                 " must be finite and >= 0 (0: off)"};
+  }
+  if (!(odometry_cov_yaw_rad2_per_s >= 0.0) || !std::isfinite(odometry_cov_yaw_rad2_per_s) ||
+      !(registration_yaw_stddev_rad > 0.0) || !std::isfinite(registration_yaw_stddev_rad)) {
+    return Error{"loop closer config: odometry_cov_yaw_rad2_per_s = " + std::to_string(odometry_cov_yaw_rad2_per_s) +
+                 " must be finite and >= 0, registration_yaw_stddev_rad = " +
+                 std::to_string(registration_yaw_stddev_rad) + " finite and > 0"};
+  }
   return Status::success();
 }
 
@@ -240,6 +250,18 @@ LoopCloseOutcome LoopCloser::registerCandidates(
       ++out.stats.rejected;
       ++out.stats.rejected_by_reason["yaw_disagreement"];
       continue;
+    }
+    if (config_.odometry_yaw_sigmas > 0.0 && source.T_world_submap_odometry && target.T_world_submap_odometry) {
+      const geometry::Pose3 T_odometry = target.T_world_submap_odometry->inverse() * *source.T_world_submap_odometry;
+      const double off = std::abs(
+          geometry::wrapAngle(geometry::yawOf(icp->T_target_source.linear()) - geometry::yawOf(T_odometry.linear())));
+      const double stddev = std::sqrt(config_.odometry_cov_yaw_rad2_per_s * std::abs(dt_s) +
+                                      config_.registration_yaw_stddev_rad * config_.registration_yaw_stddev_rad);
+      if (off > config_.odometry_yaw_sigmas * stddev) {
+        ++out.stats.rejected;
+        ++out.stats.rejected_by_reason["odometry_yaw"];
+        continue;
+      }
     }
     const double overlap = static_cast<double>(icp->n_correspondences) /
                            static_cast<double>(std::max<std::size_t>(1, source.grid->cloud().size()));

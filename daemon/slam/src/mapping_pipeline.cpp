@@ -314,7 +314,7 @@ Result<std::unique_ptr<MappingPipeline>> MappingPipeline::restore(const MappingP
     record.n_scans = c.n_scans;
     record.reason = c.reason;
     p.submaps_.push_back(record);
-    p.loop_submaps_.push_back({id, c.grid, pose.value(), c.first_stamp_ns});
+    p.loop_submaps_.push_back({id, c.grid, pose.value(), c.first_stamp_ns, c.T_world_base_odom});
     if (Status s = p.candidates_.add(footprintOf(p.loop_submaps_.back())); !s.ok()) {
       return Error{"restore: " + s.error().message};
     }
@@ -407,7 +407,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   record.n_scans = closed.n_scans;
   record.reason = closed.reason;
 
-  const LoopSubmap fresh{id, closed.grid, T_world_init, closed.first_stamp_ns};
+  const LoopSubmap fresh{id, closed.grid, T_world_init, closed.first_stamp_ns, closed.T_world_base_odom};
   if (!closed.grid || !closed.grid->finalized()) {
     return Error{"mapping: submap " + std::to_string(id) + " has no finalized grid"};
   }
@@ -501,7 +501,7 @@ Result<MappingUpdate> MappingPipeline::process(ClosedSubmap closed) {
   }
   record.T_world_base = poses.back();
   submaps_.push_back(record);
-  loop_submaps_.push_back({id, closed.grid, poses.back(), closed.first_stamp_ns});
+  loop_submaps_.push_back({id, closed.grid, poses.back(), closed.first_stamp_ns, closed.T_world_base_odom});
   if (Status s = candidates_.add(footprint); !s.ok()) return Error{"mapping: " + s.error().message};
   graph_ = std::move(graph);
   for (std::size_t k = 0; k < active.size(); ++k) {

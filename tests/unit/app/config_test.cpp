@@ -89,6 +89,10 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(la.min_overlap_fraction, lb.min_overlap_fraction);
   EXPECT_EQ(la.p2p_min_overlap_fraction, lb.p2p_min_overlap_fraction);
   EXPECT_EQ(la.acceptance.odometry_cov_x_m2_per_s, lb.acceptance.odometry_cov_x_m2_per_s);
+  EXPECT_EQ(la.odometry_yaw_sigmas, lb.odometry_yaw_sigmas);
+  EXPECT_EQ(la.odometry_cov_yaw_rad2_per_s, lb.odometry_cov_yaw_rad2_per_s);
+  EXPECT_NEAR(la.registration_yaw_stddev_rad, lb.registration_yaw_stddev_rad, 1e-6);
+  EXPECT_EQ(la.point_to_plane.normal_noise_floor, lb.point_to_plane.normal_noise_floor);
   EXPECT_EQ(a.mapping.graph.loop_closure_loss_scale, b.mapping.graph.loop_closure_loss_scale);
   EXPECT_EQ(a.mapping.depth_stddev_m, b.mapping.depth_stddev_m);
   EXPECT_NEAR(a.mapping.roll_pitch_stddev_rad, b.mapping.roll_pitch_stddev_rad, 1e-9);

@@ -215,6 +215,66 @@ TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
   EXPECT_NEAR(toXyzRpy(r->T_target_source)(kY), toXyzRpy(kTruth)(kY), 0.03);
 }
 
+PointToPlaneConfig withNoiseFloor() {
+  PointToPlaneConfig c;
+  c.normal_noise_floor = true;
+  return c;
+}
+
+// The same long wall with noisy normals: the noise floor takes off the information their noise adds
+// along the wall (estimated from the angles between corresponding normals), so the slide is not
+// well-conditioned, the registration does not step along it and the factor does not assert it; the
+// normal and the heading, which the wall's points constrain by moving across it, stay.
+TEST(DegeneracyAwareIcp, NoiseFloorDropsTheSlideAlongAWallWhoseNoisyNormalsPassTheEigenvalueRule) {
+  const WallPair w = makeClouds({wallX()}, 0.2);
+  Vector6d x_odom = toXyzRpy(kTruth);
+  x_odom(kX) += 0.1;
+  x_odom(kY) += 0.3;
+  x_odom(kYaw) += deg2rad(1.5);
+  const auto without = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), PointToPlaneConfig{});
+  ASSERT_TRUE(without.ok()) << without.error().message;
+  ASSERT_EQ(without->V_u.rows(), 3) << "the eigenvalue rule should keep the slide for this test to mean anything";
+
+  const auto with = icpPointToPlane(w.source, w.target, fromXyzRpy(x_odom), withNoiseFloor());
+  ASSERT_TRUE(with.ok()) << with.error().message;
+  EXPECT_TRUE(with->converged);
+  ASSERT_EQ(with->V_u.rows(), 2);
+  const Matrix6d P = with->V_u.transpose() * with->V_u;
+  EXPECT_LT((P * Vector6d::Unit(kY)).norm(), 0.1) << "the slide along the wall must not be asserted";
+  EXPECT_GT((P * Vector6d::Unit(kX)).norm(), 0.99);
+  EXPECT_GT((P * Vector6d::Unit(kYaw)).norm(), 0.99);
+  const Vector6d x = toXyzRpy(with->T_target_source);
+  const Vector6d truth = toXyzRpy(kTruth);
+  EXPECT_NEAR(x(kY), x_odom(kY), 0.01) << "along the wall the estimate stays at the initial guess";
+  EXPECT_NEAR(x(kX), truth(kX), 0.02);
+  EXPECT_NEAR(x(kYaw), truth(kYaw), deg2rad(0.5));
+  EXPECT_GT(std::abs(toXyzRpy(without->T_target_source)(kY) - x_odom(kY)), std::abs(x(kY) - x_odom(kY)) + 1e-3)
+      << "without the floor the registration steps along the noise-driven slide";
+}
+
+// The wall with the small box on it and the same noisy normals: the box's sides move across their
+// surface along the wall, so the slide keeps its information above the floor and is recovered.
+TEST(DegeneracyAwareIcp, NoiseFloorKeepsTheSlideAFeatureOnTheWallPins) {
+  const Plane front{{4.7, 0.0, -2.5}, {0, 0, 1}, {0, 1, 0}, 0.5, 0.6};
+  const Plane side_a{{4.7, 0.0, -2.5}, {1, 0, 0}, {0, 0, 1}, 0.3, 0.5};
+  const Plane side_b{{4.7, 0.6, -2.5}, {0, 0, 1}, {1, 0, 0}, 0.5, 0.3};
+  const WallPair w = makeClouds({wallX(), front, side_a, side_b}, 0.2);
+  Vector6d x0 = toXyzRpy(kTruth);
+  x0(kX) += 0.1;
+  x0(kY) += 0.15;
+  const auto r = icpPointToPlane(w.source, w.target, fromXyzRpy(x0), withNoiseFloor());
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->V_u.rows(), 3);
+  EXPECT_NEAR(toXyzRpy(r->T_target_source)(kY), toXyzRpy(kTruth)(kY), 0.03);
+
+  // The floor is estimated from the normals' agreement, so it needs the normals check.
+  PointToPlaneConfig unchecked = withNoiseFloor();
+  unchecked.max_normal_angle_rad = std::numbers::pi;
+  const Status s = unchecked.validate();
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("normal_noise_floor"), std::string::npos) << s.error().message;
+}
+
 // Test (2): a corner; full rank; truth recovered within 2 cm / 0.5 deg from 0.3 m / 3 deg.
 TEST(DegeneracyAwareIcp, CornerIsFullRankAndRecoversTruth) {
   const WallPair w = makeClouds({wallX(), wallY()}, 0.02);

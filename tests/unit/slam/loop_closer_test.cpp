@@ -96,6 +96,46 @@ TEST(LoopCloser, ARegistrationThatTurnsThePriorTooMuchIsRefused) {
   }
 }
 
+// The heading against the odometry: the same revisit (its estimate right), with the odometry's base
+// poses turned apart by 1 deg and by 3 deg. At 3 sigma of the heading's drift over 200 s and the
+// registration's 0.5 deg (1.7 deg) the first is accepted and the second refused, the reason counted;
+// the check is off by default and skipped for submaps without odometry poses.
+TEST(LoopCloser, ARegistrationThatDisagreesWithTheOdometrysHeadingIsRefused) {
+  const auto orbit = test::orbitTrajectory(80, 5.5, -2.0);
+  const auto submapsWithOdometryTurn = [&](double turn_deg) {
+    std::vector<LoopSubmap> submaps = {
+        {0, gridOf(orbit, 1), orbit.front(), 0},
+        {5, gridOf(orbit, 2), orbit.front(), 200'000'000'000},
+    };
+    submaps[0].T_world_submap_odometry = orbit.front();
+    submaps[1].T_world_submap_odometry =
+        orbit.front() * geometry::poseFromXyzRpy(0.3, 0.2, 0.0, 0.0, 0.0, deg2rad(turn_deg));
+    return submaps;
+  };
+  LoopCloserConfig c;
+  c.point_to_plane.max_correspondence_distance_m = 0.5;
+  const auto run = [](const LoopCloserConfig& config, const std::vector<LoopSubmap>& submaps) {
+    auto closer = LoopCloser::create(config);
+    EXPECT_TRUE(closer.ok());
+    auto out = closer->closeLoops(submaps, 1);
+    EXPECT_TRUE(out.ok()) << out.error().message;
+    return out.value().stats;
+  };
+  EXPECT_EQ(run(c, submapsWithOdometryTurn(3.0)).accepted, 1) << "off by default";
+  c.odometry_yaw_sigmas = 3.0;
+  EXPECT_EQ(run(c, submapsWithOdometryTurn(1.0)).accepted, 1);
+  const LoopCloseStats refused = run(c, submapsWithOdometryTurn(3.0));
+  EXPECT_EQ(refused.accepted, 0);
+  EXPECT_EQ(refused.rejected_by_reason.count("odometry_yaw"), 1U);
+  std::vector<LoopSubmap> without = submapsWithOdometryTurn(3.0);
+  without[0].T_world_submap_odometry.reset();
+  EXPECT_EQ(run(c, without).accepted, 1) << "no odometry pose: not checked";
+  c.odometry_yaw_sigmas = -1.0;
+  auto bad = LoopCloser::create(c);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("odometry_yaw_sigmas"), std::string::npos) << bad.error().message;
+}
+
 // max_registrations: only the candidates whose centroids are nearest the new submap's are registered,
 // the others counted as skipped. Three earlier views of the stretch, starting 0, 10 and 20 poses on.
 TEST(LoopCloser, TheRegistrationBudgetTriesTheNearestCandidates) {

@@ -21,6 +21,14 @@
 // Note that the rule trusts the normals: noisy normals add spurious information along a wall, which
 // grows with the point count, so sigma_point_m should not be set below the real residual noise.
 //
+// Noise floor (normal_noise_floor): a point whose step along v moves it by d contributes (n . d)^2 to
+// v's information; where d runs along its surface that is (dn . d)^2, the normal's error dn, of mean
+// sigma_n^2 |d - (n . d) n|^2. That mean, summed over the correspondences, is taken off v's eigenvalue
+// before the rule, with sigma_n^2 (per tangent axis of one normal) a quarter of the mean of
+// |n_target - n_source|^2 over the correspondences (two normals' noise on two axes). On a plain wall
+// the slide then keeps almost nothing, while the normal and the heading (wall points moving across the
+// wall) and a feature's sides (moving across their own surface) keep what they had.
+//
 // Unique optimum (the eigenvalue alone cannot tell): on a long flat wall with a few small features the
 // normals' noise makes the slide along the wall look well-conditioned while a second optimum lies
 // along it (a feature seen by one submap only, or none). So each direction the rule keeps is probed:
@@ -120,6 +128,9 @@ struct PointToPlaneConfig {
   // of a propeller holds a few hundred cloud points, with which no translation reaches 1 cm
   // (vog-bench slam).
   double max_direction_stddev = 0.03;
+  // Noise floor (degeneracy_aware only; the rule above): the information the normals' own noise adds
+  // along a direction is taken off its eigenvalue before the rule. Needs the normals check on.
+  bool normal_noise_floor = false;
   // Unique-optimum probe above (degeneracy_aware only): shifts of probe_max_shift_m / probe_steps,
   // 2 probe_max_shift_m / probe_steps, ... up to probe_max_shift_m on both sides (1 m: the capture
   // range, so the shortest shift is beyond the final bound); 0 steps turns the probe off, as it is by

@@ -22,6 +22,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -70,6 +71,14 @@ struct LoopCloserConfig {
   // mapping_pipeline_test).
   double min_overlap_fraction = 0.3;
   double p2p_min_overlap_fraction = 0.5;
+  // Heading against the odometry (0: off): the registered yaw may differ from the odometry's relative
+  // yaw between the two bases (not the current estimates, which earlier closures may have turned) by at
+  // most odometry_yaw_sigmas standard deviations of that difference, sqrt(odometry_cov_yaw dt +
+  // registration_yaw_stddev^2): the heading's random walk between the two bases (thesis 4.4.1) and the
+  // registration's own heading error (voxel-sized on a few metres).
+  double odometry_yaw_sigmas = 0.0;
+  double odometry_cov_yaw_rad2_per_s = 1e-7;
+  double registration_yaw_stddev_rad = 0.008727;  // 0.5 deg
   Status validate() const;
 };
 
@@ -80,6 +89,9 @@ struct LoopSubmap {
   std::shared_ptr<const map::LocalGrid> grid;
   geometry::Pose3 T_world_submap = geometry::Pose3::Identity();
   std::int64_t first_stamp_ns = 0;
+  // The odometry's own base pose (before any closure), for the heading check against odometry; a
+  // submap without it is not checked.
+  std::optional<geometry::Pose3> T_world_submap_odometry = std::nullopt;
 };
 
 // The candidate gate's view of a submap: its grid's known box, cloud centroid and cloud size (fixed once
