@@ -198,13 +198,17 @@ TEST(DegeneracyAwareIcp, ProbeDropsTheSlideAlongAWallWhoseNoisyNormalsPassTheEig
                             1e-9));
 }
 
-// The same wall with a small box on it (0.6 x 0.5 m, 0.3 m proud): its sides pin the slide, which the
-// probe keeps.
-TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
+// The wall with a small box on it (0.6 x 0.5 m, 0.3 m proud), whose sides pin the slide.
+std::vector<Plane> wallWithABox() {
   const Plane front{{4.7, 0.0, -2.5}, {0, 0, 1}, {0, 1, 0}, 0.5, 0.6};   // normal -x, facing the origin
   const Plane side_a{{4.7, 0.0, -2.5}, {1, 0, 0}, {0, 0, 1}, 0.3, 0.5};  // y = 0, normal -y
   const Plane side_b{{4.7, 0.6, -2.5}, {0, 0, 1}, {1, 0, 0}, 0.5, 0.3};  // y = 0.6, normal +y
-  const WallPair w = makeClouds({wallX(), front, side_a, side_b}, 0.2);
+  return {wallX(), front, side_a, side_b};
+}
+
+// The same wall with the box: the probe keeps the slide.
+TEST(DegeneracyAwareIcp, ProbeKeepsTheSlideAFeatureOnTheWallPins) {
+  const WallPair w = makeClouds(wallWithABox(), 0.2);
   Vector6d x0 = toXyzRpy(kTruth);
   x0(kX) += 0.1;
   x0(kY) += 0.15;
@@ -255,10 +259,7 @@ TEST(DegeneracyAwareIcp, NoiseFloorDropsTheSlideAlongAWallWhoseNoisyNormalsPassT
 // The wall with the small box on it and the same noisy normals: the box's sides move across their
 // surface along the wall, so the slide keeps its information above the floor and is recovered.
 TEST(DegeneracyAwareIcp, NoiseFloorKeepsTheSlideAFeatureOnTheWallPins) {
-  const Plane front{{4.7, 0.0, -2.5}, {0, 0, 1}, {0, 1, 0}, 0.5, 0.6};
-  const Plane side_a{{4.7, 0.0, -2.5}, {1, 0, 0}, {0, 0, 1}, 0.3, 0.5};
-  const Plane side_b{{4.7, 0.6, -2.5}, {0, 0, 1}, {1, 0, 0}, 0.5, 0.3};
-  const WallPair w = makeClouds({wallX(), front, side_a, side_b}, 0.2);
+  const WallPair w = makeClouds(wallWithABox(), 0.2);
   Vector6d x0 = toXyzRpy(kTruth);
   x0(kX) += 0.1;
   x0(kY) += 0.15;
