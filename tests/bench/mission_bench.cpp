@@ -301,6 +301,8 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       ->check(CLI::Range(1, 100'000));
   vog::bench::addSparseBackendOption(app, mc.graph.sparse_backend,
                                      "mapping: the pose graph's sparse Cholesky, eigen or suitesparse");
+  app.add_option("--graph-attitude-from-absolute", mc.graph.attitude_from_absolute,
+                 "mapping: hold each submap's depth and attitude at its absolute factor; solve x, y, yaw (1/0)");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,
                "mapping: after a closure optimise only the loop it closes, not the whole pose graph");
   app.add_option("--local-optimization-nodes", mc.local_optimization_nodes,

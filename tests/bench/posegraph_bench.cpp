@@ -152,6 +152,8 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
   app.add_option("--g2o", g2o_path, "g2o file (VERTEX_SE2/EDGE_SE2 or VERTEX_SE3:QUAT/EDGE_SE3:QUAT)");
   app.add_option("--chain", chain, "instead of a file: the mapping pipeline's graph after this many submaps")
       ->check(CLI::Range(42, 100000));
+  app.add_option("--attitude-from-absolute", config.attitude_from_absolute,
+                 "hold z, roll and pitch that no relative factor measures at their absolute factor (1/0)");
   app.add_option("--init", init,
                  "initial estimate: file (the file's vertices; for a file without VERTEX lines, a spanning tree), "
                  "odom (composed consecutive edges), tree (composed along a breadth-first spanning tree from the "

@@ -127,6 +127,7 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.integer("full_optimization_every", c.full_optimization_every, 1, 1'000'000);
   m.enumeration("sparse_backend", c.graph.sparse_backend,
                 {{"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}});
+  m.boolean("attitude_from_absolute", c.graph.attitude_from_absolute);
   m.finish();
 }
 

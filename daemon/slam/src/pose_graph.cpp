@@ -682,6 +682,19 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
     ComponentMask& m = constrained[id];
     for (std::size_t i = 0; i < 6; ++i) m[i] = m[i] || mask[i];
   };
+  // Whether a relative factor measures z, roll or pitch: SE3 factors and full closures do; odometry,
+  // SE2 factors and closures whose directions lie in (x, y, yaw) (the planar registration) do not.
+  const auto measures_attitude = [](const RelativeFactor& f) {
+    switch (f.kind) {
+      case RelativeKind::kOdometry:
+      case RelativeKind::kSe2: return false;
+      case RelativeKind::kSe3: return true;
+      case RelativeKind::kLoopClosure:
+      case RelativeKind::kPartialLoopClosure: break;
+    }
+    return !f.projection.col(kZ).isZero(0.0) || !f.projection.col(kRoll).isZero(0.0) ||
+           !f.projection.col(kPitch).isZero(0.0);
+  };
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
   for (const RelativeFactor& f : relative_) {
@@ -715,13 +728,29 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
         break;
       }
     }
-    const bool planar = f.kind == RelativeKind::kOdometry || f.kind == RelativeKind::kSe2;
-    mark(f.from, planar ? kPlanarMask : kAllMask);
-    mark(f.to, planar ? kPlanarMask : kAllMask);
+    const ComponentMask& mask = measures_attitude(f) ? kAllMask : kPlanarMask;
+    mark(f.from, mask);
+    mark(f.to, mask);
     problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
   }
+  // PoseGraphConfig::attitude_from_absolute: z, roll and pitch that no relative factor measures are
+  // the one absolute factor's, held.
+  std::map<NodeId, int> absolute_count;
+  for (const AbsoluteFactor& f : absolute_) ++absolute_count[f.id];
+  const auto attitude_held = [&](NodeId id) {
+    const auto it = constrained.find(id);
+    const bool measured = it != constrained.end() && (it->second[kZ] || it->second[kRoll] || it->second[kPitch]);
+    return config_.attitude_from_absolute && !measured && absolute_count.at(id) == 1 && fixed_.count(id) == 0;
+  };
   for (const AbsoluteFactor& f : absolute_) {
     if (!free(f.id)) continue;
+    if (attitude_held(f.id)) {
+      Vector6d& x = work.at(f.id);
+      x(kZ) = f.z_roll_pitch(0);
+      x(kRoll) = f.z_roll_pitch(1);
+      x(kPitch) = f.z_roll_pitch(2);
+      continue;
+    }
     problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
         nullptr, work.at(f.id).data());

@@ -101,6 +101,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.local_optimization_nodes, b.mapping.local_optimization_nodes);
   EXPECT_EQ(a.mapping.full_optimization_every, b.mapping.full_optimization_every);
   EXPECT_EQ(a.mapping.graph.sparse_backend, b.mapping.graph.sparse_backend);
+  EXPECT_EQ(a.mapping.graph.attitude_from_absolute, b.mapping.graph.attitude_from_absolute);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
   EXPECT_EQ(a.merge.threads, b.merge.threads);

@@ -411,6 +411,66 @@ TEST(PoseGraph, PartialClosureConstrainsOnlyItsDirections) {
   EXPECT_NEAR(x1(kY), 1.0, 1e-3);
 }
 
+// Two nodes at different depths, each with an absolute factor (node 0 added off its measurement),
+// odometry, and a closure of the planar registration (directions x and yaw) that disagrees with the
+// odometry: its x in node 0's frame depends on node 0's pitch, since the nodes differ in depth.
+struct AttitudeCase {
+  Eigen::Vector3d m0{-2.0, 0.02, 0.3}, m1{-3.0, -0.01, 0.05};  // z, roll, pitch
+  PoseGraph graph;
+};
+
+AttitudeCase attitudeCase(const PoseGraphConfig& config) {
+  auto graph = PoseGraph::create(config);
+  EXPECT_TRUE(graph.ok());
+  AttitudeCase c{.graph = std::move(*graph)};
+  PoseGraph& g = c.graph;
+  const Pose3 T0 = geometry::poseFromXyzRpy(0, 0, -2.1, 0.0, 0.0, 0.0);
+  const Pose3 T1 = geometry::poseFromXyzRpy(3.0, 1.0, -3.0, 0.0, 0.0, 0.1);
+  EXPECT_TRUE(g.addNode(0, T0).ok());
+  EXPECT_TRUE(g.addNode(1, T1).ok());
+  EXPECT_TRUE(g.addOdometryFactor(0, 1, planarOdometry(T0, T1), Eigen::Matrix3d::Identity()).ok());
+  const Eigen::Matrix3d weak = Eigen::Matrix3d::Identity() * 1e2;  // 0.1 m / 0.1 rad
+  EXPECT_TRUE(g.addAbsoluteFactor(0, c.m0, weak).ok());
+  EXPECT_TRUE(g.addAbsoluteFactor(1, c.m1, weak).ok());
+  Vector6d x_icp;
+  x_icp << 3.4, 0.0, 0.0, 0.0, 0.0, 0.05;
+  Eigen::MatrixXd V_u = Eigen::MatrixXd::Zero(2, 6);
+  V_u(0, kX) = 1.0;
+  V_u(1, kYaw) = 1.0;
+  auto closure = makePartialLoopClosure(V_u, x_icp, Matrix6d::Identity() * 1e-6);
+  EXPECT_TRUE(closure.ok()) << closure.error().message;
+  EXPECT_TRUE(g.addPartialLoopClosure(0, 1, *closure).ok());
+  auto r = g.optimize();
+  EXPECT_TRUE(r.ok()) << r.error().message;
+  // The closure's directions hold either way.
+  const Vector6d rel = toXyzRpy(g.pose(0)->inverse() * *g.pose(1));
+  EXPECT_NEAR(rel(kX), 3.4, 1e-4);
+  EXPECT_NEAR(rel(kYaw), 0.05, 1e-4);
+  return c;
+}
+
+// attitude_from_absolute: no relative factor measures depth or attitude, so each node's z, roll and
+// pitch are its absolute factor's, exactly.
+TEST(PoseGraph, AttitudeFromAbsoluteHoldsTheMeasurement) {
+  PoseGraphConfig config;
+  config.attitude_from_absolute = true;
+  const AttitudeCase c = attitudeCase(config);
+  for (const auto& [id, m] : {std::pair{NodeId{0}, c.m0}, std::pair{NodeId{1}, c.m1}}) {
+    const Vector6d x = toXyzRpy(*c.graph.pose(id));
+    EXPECT_NEAR(x(kZ), m(0), 1e-12) << "node " << id;
+    EXPECT_NEAR(x(kRoll), m(1), 1e-12) << "node " << id;
+    EXPECT_NEAR(x(kPitch), m(2), 1e-12) << "node " << id;
+  }
+}
+
+// Without it (the default) the attitudes are solved with the rest: the closure tilts node 0.
+TEST(PoseGraph, AttitudeSolvedWithTheRestMovesUnderAPlanarClosure) {
+  const AttitudeCase c = attitudeCase({});
+  const Vector6d x0 = toXyzRpy(*c.graph.pose(0));
+  EXPECT_GT(std::abs(x0(kPitch) - c.m0(2)), 1e-6);
+  EXPECT_NEAR(x0(kPitch), c.m0(2), 1e-3);
+}
+
 TEST(PoseGraph, BadInputRejectedAndGraphUnchanged) {
   auto bad_config = PoseGraphConfig{};
   bad_config.loop_closure_loss_scale = -1.0;

@@ -53,6 +53,12 @@ struct PoseGraphConfig {
   // (gauge freedom). Its z, roll and pitch stay free under its absolute factor.
   bool anchor_first_node = true;
   SparseBackend sparse_backend = SparseBackend::kSuiteSparse;
+  // A node whose z, roll and pitch no relative factor measures (odometry, SE2 factors and closures
+  // of the planar registration do not) takes them from its one absolute factor and holds them, as
+  // thesis 4.1 reduces the vehicle's pose estimation to x, y and yaw: three unknowns per node instead
+  // of six in every factorisation. Off: they are solved with the rest, and closures that held them
+  // in their registration pull on them through the relative rotation.
+  bool attitude_from_absolute = false;
 
   Status validate() const;
 };
