@@ -181,16 +181,16 @@ Linearisation linearisePointToPlane(const geometry::PointCloud& source, const ge
   return lin;
 }
 
-// Whether eigenvector v (eigenvalue lambda) of lin's A^T A is well-conditioned: lambda, less the
-// information the normals' noise alone gives along v (when lin has the noise floor), reaches lambda_min.
-bool wellConditioned(const Linearisation& lin, const Eigen::VectorXd& v, double lambda, double lambda_min) {
-  return lambda > 0.0 && lambda - lin.noiseInformation(v) >= lambda_min;
+// Whether eigenvector v (eigenvalue lambda) of an A^T A is well-conditioned: lambda, less the
+// information the normals' noise alone gives along v (`noise`: the point-to-plane linearisation, whose
+// noise floor is empty when the option is off; null: none), reaches lambda_min.
+bool wellConditioned(const Linearisation* noise, const Eigen::VectorXd& v, double lambda, double lambda_min) {
+  return lambda > 0.0 && lambda - (noise != nullptr ? noise->noiseInformation(v) : 0.0) >= lambda_min;
 }
 
-// Fills information, covariance, V_u and eigenvalues from lin's A^T A at the result.
-void fillConditioning(IcpResult& out, const Linearisation& lin, const std::vector<int>& comps, double sigma,
-                      double lambda_min) {
-  const Eigen::MatrixXd& AtA = lin.AtA;
+// Fills information, covariance, V_u and eigenvalues from A^T A at the result (noise: as above).
+void fillConditioning(IcpResult& out, const Eigen::MatrixXd& AtA, const Linearisation* noise,
+                      const std::vector<int>& comps, double sigma, double lambda_min) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(AtA);
   const auto m = static_cast<Eigen::Index>(comps.size());
   out.eigenvalues = eig.eigenvalues();
@@ -203,7 +203,7 @@ void fillConditioning(IcpResult& out, const Linearisation& lin, const std::vecto
   }
   std::vector<Eigen::Index> good;
   for (Eigen::Index i = m - 1; i >= 0; --i) {  // decreasing eigenvalue
-    if (wellConditioned(lin, eig.eigenvectors().col(i), eig.eigenvalues()(i), lambda_min)) good.push_back(i);
+    if (wellConditioned(noise, eig.eigenvectors().col(i), eig.eigenvalues()(i), lambda_min)) good.push_back(i);
   }
   out.V_u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(good.size()), 6);
   out.eigenvalues_u = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(good.size()));
@@ -495,9 +495,7 @@ Result<IcpResult> icpPointToPoint2d(const geometry::PointCloud& source, const ge
   if (n < config.min_correspondences) return Error{"icp: too few correspondences at the result"};
   out.n_correspondences = n;
   out.fitness_m2 = sum_sq / static_cast<double>(n);
-  Linearisation lin;
-  lin.AtA = AtA;
-  fillConditioning(out, lin, {kX, kY, kYaw}, config.sigma_point_m, 0.0);
+  fillConditioning(out, AtA, nullptr, {kX, kY, kYaw}, config.sigma_point_m, 0.0);
   return out;
 }
 
@@ -541,7 +539,7 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
     for (Eigen::Index i = 0; i < eig.eigenvalues().size(); ++i) {
       const double lambda = eig.eigenvalues()(i);
       const Eigen::VectorXd v = eig.eigenvectors().col(i);
-      if (!wellConditioned(lin, v, lambda, lambda_min)) continue;
+      if (!wellConditioned(&lin, v, lambda, lambda_min)) continue;
       step += v * (v.dot(lin.Atb) / lambda);
     }
     for (std::size_t c = 0; c < comps.size(); ++c) x(comps[c]) += step(static_cast<Eigen::Index>(c));
@@ -563,7 +561,8 @@ Result<IcpResult> icpPointToPlane(const geometry::PointCloud& source, const geom
   out.n_correspondences = lin.n_inliers;
   out.fitness_m2 = lin.sum_sq_inliers / static_cast<double>(lin.n_inliers);
   const double lambda_max = lin.AtA.cwiseAbs().maxCoeff();
-  fillConditioning(out, lin, comps, config.sigma_point_m, config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
+  fillConditioning(out, lin.AtA, &lin, comps, config.sigma_point_m,
+                   config.degeneracy_aware ? lambda_wc : 1e-12 * lambda_max);
   if (config.degeneracy_aware) dropAmbiguousDirections(out, source, target, nn, x, comps, config, target_known);
   return out;
 }
