@@ -159,7 +159,11 @@ Status Daemon::init() {
   mapping_ = std::make_unique<MappingStage>(config_.source == Source::kSim, std::move(pipeline).value(), *store_, *raw_,
                                             *merge_, [this] { planner_cv_.notify_all(); });
 
-  if (config_.source == Source::kSim) {
+  if (options_.make_source) {
+    auto source = options_.make_source();
+    if (!source) return source.error();
+    source_ = std::move(source).value();
+  } else if (config_.source == Source::kSim) {
     auto source = SimSource::create(config_.sim, sim_start);
     if (!source) return source.error();
     source_ = std::move(source).value();
@@ -215,8 +219,10 @@ void Daemon::onRawBytes(std::uint16_t device_id, std::int64_t stamp_ns, std::spa
 
 // ---------------------------------------------------------------- mapping thread
 
+// Maps until the queue ends: at a shutdown, after every scan the source handed over (the raw log
+// holds their bytes, so a replay maps them too).
 void Daemon::mappingLoop() {
-  while (!stopping_) {
+  while (!scans_.ended()) {
     ++mapping_beat_;
     mapping_->retryStorage();
     std::optional<QueuedScan> item = scans_.pop(std::chrono::milliseconds(200));
@@ -224,6 +230,7 @@ void Daemon::mappingLoop() {
     auto mapped = mapping_->process(*item, mapping_enabled_.load());
     if (!mapped) {
       fail("mission store", mapped.error());
+      scans_.stop();  // releases a source waiting to queue a scan
       break;
     }
     scans_.done(*mapped);
@@ -553,9 +560,9 @@ Status Daemon::run() {
   notifier_.stopping();
   const Clock::time_point t_stop = Clock::now();
   stopping_ = true;
-  scans_.stop();  // releases a source waiting to queue a scan
   planner_cv_.notify_all();
-  source_->stop();
+  source_->stop();  // mapping goes on, so a source waiting to queue a scan finishes what it recorded
+  scans_.close();   // mapping ends once it has mapped every queued scan
   if (planning_thread_.joinable()) planning_thread_.join();
   journalStates();  // the planning thread's last decision
   if (mapping_thread_.joinable()) mapping_thread_.join();

@@ -6,8 +6,8 @@ namespace vog::app {
 
 bool ScanQueue::push(QueuedScan scan) {
   std::unique_lock lock(mutex_);
-  cv_.wait(lock, [&] { return queue_.size() < capacity_ || stopped_; });
-  if (stopped_) return false;
+  cv_.wait(lock, [&] { return queue_.size() < capacity_ || stopped_ || closed_; });
+  if (stopped_ || closed_) return false;
   queue_.push_back(std::move(scan));
   ++unmapped_;
   cv_.notify_all();
@@ -16,7 +16,7 @@ bool ScanQueue::push(QueuedScan scan) {
 
 std::optional<QueuedScan> ScanQueue::pop(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
-  cv_.wait_for(lock, timeout, [&] { return !queue_.empty() || stopped_; });
+  cv_.wait_for(lock, timeout, [&] { return !queue_.empty() || stopped_ || closed_; });
   if (stopped_ || queue_.empty()) return std::nullopt;
   QueuedScan out = std::move(queue_.front());
   queue_.pop_front();
@@ -44,6 +44,14 @@ bool ScanQueue::waitDrained() {
   return !stopped_;
 }
 
+void ScanQueue::close() {
+  {
+    const std::lock_guard lock(mutex_);
+    closed_ = true;
+  }
+  cv_.notify_all();
+}
+
 void ScanQueue::stop() {
   {
     const std::lock_guard lock(mutex_);
@@ -55,6 +63,11 @@ void ScanQueue::stop() {
 bool ScanQueue::stopped() const {
   const std::lock_guard lock(mutex_);
   return stopped_;
+}
+
+bool ScanQueue::ended() const {
+  const std::lock_guard lock(mutex_);
+  return stopped_ || (closed_ && queue_.empty());
 }
 
 std::uint64_t ScanQueue::notMapped() const {

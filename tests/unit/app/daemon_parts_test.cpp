@@ -177,6 +177,23 @@ TEST(ScanQueue, StopReleasesEveryWaiter) {
   EXPECT_TRUE(q.stopped());
 }
 
+TEST(ScanQueue, CloseRefusesNewScansAndStillHandsOutTheQueuedOnes) {
+  ScanQueue q(4);
+  ASSERT_TRUE(q.push(scanAt(1)));
+  ASSERT_TRUE(q.push(scanAt(2)));
+  q.close();
+  EXPECT_FALSE(q.push(scanAt(3)));
+  EXPECT_FALSE(q.ended());
+  EXPECT_EQ(q.pop(std::chrono::milliseconds(10))->scan.scan.stamp_ns, 1);
+  EXPECT_EQ(q.pop(std::chrono::milliseconds(10))->scan.scan.stamp_ns, 2);
+  EXPECT_TRUE(q.ended());
+  // Closed and empty: pop returns at once, without waiting out its timeout.
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(q.pop(std::chrono::seconds(30)).has_value());
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(10));
+  EXPECT_FALSE(q.stopped());
+}
+
 TEST(RawRecorder, TheMappingGateIsRecordedWhenItChangesBeforeTheInputsItGates) {
   test::TempDir dir("raw-recorder");
   const std::filesystem::path file = dir.path() / "raw.log";

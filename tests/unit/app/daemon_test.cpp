@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <future>
 #include <thread>
 
 namespace vog::app {
@@ -168,6 +169,91 @@ TEST(Daemon, SimulatedMissionRunsResumesAndReplays) {
   EXPECT_TRUE(std::filesystem::exists(out / "map.bt"));
   // A second replay into the same folder is refused, not mixed in.
   EXPECT_FALSE(replayMission(config, *options.mission_dir, out).ok());
+}
+
+// A vehicle that hands over `n` scans of a wall as fast as the daemon takes them, on its own thread,
+// then holds still; it counts the scans the daemon accepted.
+class ScriptedVehicle final : public VehicleSource {
+ public:
+  explicit ScriptedVehicle(int n) : n_(n) {}
+  ~ScriptedVehicle() override { stop(); }
+  Status start(SourceSink& sink) override {
+    thread_ = std::thread([this, &sink] {
+      OdometrySample o;
+      o.T_odom_vehicle = geometry::poseFromXyzRpy(0, 0, -2, 0, 0, 0);
+      sink.onOdometry(o);
+      for (int i = 0; i < n_ && !stopping_; ++i) {
+        slam::ScanInput in;
+        in.scan.stamp_ns = (i + 1) * 100'000'000LL;
+        in.T_world_vehicle_odom = geometry::poseFromXyzRpy(0, -3.0 + 0.01 * i, -2, 0, 0, 0);  // inside the box
+        in.z_roll_pitch = Eigen::Vector3d(-2, 0, 0);
+        in.scan.range_m.assign(96, 4.0f);
+        if (!sink.onScan(in, std::nullopt)) break;
+        ++accepted_;
+      }
+      handed_over_.set_value();
+    });
+    return {};
+  }
+  void stop() override {
+    stopping_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  Status setWaypoints(std::vector<SourceWaypoint>) override { return {}; }
+  bool idle() const override { return false; }  // never arrives: the planner waits
+  std::vector<api::DeviceHealth> health() const override { return {}; }
+  std::uint64_t heartbeat() const override { return 0; }
+  Status failure() const override { return {}; }
+  std::optional<SourceObstruction> takeObstruction() override { return std::nullopt; }
+
+  std::future<void> handedOver() { return handed_over_.get_future(); }
+  int accepted() const { return accepted_; }
+
+ private:
+  const int n_;
+  std::thread thread_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<int> accepted_{0};  // written by the vehicle's thread
+  std::promise<void> handed_over_;
+};
+
+// A stop while mapping is behind (the queue full) maps every scan the source handed over before the
+// active submap is closed, and a replay of the log maps the same scans into the same submaps.
+TEST(Daemon, AStopMapsEveryScanTheSourceHandedOver) {
+  test::TempDir dir("vogd-test");
+  const VogdConfig config = simConfig(dir, 1000);
+  DaemonOptions options;
+  options.mission_dir = dir.path() / "mission";
+  constexpr int kScans = 600;  // more than the queue holds
+  ScriptedVehicle* vehicle = nullptr;
+  options.make_source = [&]() -> Result<std::unique_ptr<VehicleSource>> {
+    auto v = std::make_unique<ScriptedVehicle>(kScans);
+    vehicle = v.get();
+    return std::unique_ptr<VehicleSource>(std::move(v));
+  };
+  {
+    RunningDaemon run(Daemon::create(config, options).value());
+    ASSERT_NE(vehicle, nullptr);
+    ASSERT_EQ(vehicle->handedOver().wait_for(std::chrono::seconds(120)), std::future_status::ready);
+    run.stop();  // at once: the queue still holds most of the scans
+    ASSERT_TRUE(run.result.ok()) << run.result.error().message;
+    EXPECT_EQ(vehicle->accepted(), kScans);
+  }
+  std::size_t mapped = 0;
+  {
+    auto d = Daemon::create(config, options);  // resumed, not run
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    for (const api::SubmapInfo& s : (*d)->submaps()) mapped += s.n_scans;
+  }
+  // Every scan is in the log, mapped or (those taken before the mission started) only recorded.
+  auto stats = replayMission(config, *options.mission_dir, dir.path() / "replay");
+  ASSERT_TRUE(stats.ok()) << stats.error().message;
+  EXPECT_EQ(stats->scans + stats->not_mapped, static_cast<std::uint64_t>(kScans));
+  EXPECT_EQ(stats->scans, mapped);
+  EXPECT_GT(mapped, 0u);
+  for (const auto& e : std::filesystem::directory_iterator(*options.mission_dir / "submaps"))
+    EXPECT_EQ(test::readFile(e.path()), test::readFile(dir.path() / "replay" / "submaps" / e.path().filename()))
+        << e.path().filename();
 }
 
 TEST(Daemon, BadSetupIsRefusedWithAReason) {

@@ -27,8 +27,8 @@
 // ReconstructionCloud (the API's cloud) and Watchdog (thread heartbeats for systemd).
 //
 // Lifecycle: create() opens (or resumes) the mission directory and builds every component; run() blocks
-// until requestStop() or a signal, then shuts down in order (source, planning, mapping with the active
-// submap closed and stored, merge, API) and returns.
+// until requestStop() or a signal, then shuts down in order (source, planning, mapping with every queued
+// scan mapped and the active submap closed and stored, merge, API) and returns.
 
 #include "vog/api/api_server.hpp"
 #include "vog/api/domain.hpp"
@@ -53,6 +53,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -63,6 +64,9 @@ namespace vog::app {
 struct DaemonOptions {
   std::optional<std::filesystem::path> mission_dir;  // replaces mission.directory/mission.name
   std::optional<std::filesystem::path> port_file;    // the bound API port is written here (port 0 picks one)
+  // Builds the vehicle source instead of the one config.source names (a scripted vehicle in tests);
+  // with `source: sim`, its scans are recorded as the simulator's are.
+  std::function<Result<std::unique_ptr<VehicleSource>>()> make_source;
 };
 
 class Daemon final : public api::ApiBackend, private SourceSink {

@@ -4,8 +4,9 @@
 // with the vehicle) and of scans recorded outside a mission (not mapped).
 //
 // Back-pressure: push() waits while the queue is full, so a source never runs ahead of mapping by
-// more than `capacity` scans. stop() releases every waiter; push() then refuses and pop() returns
-// nothing. Thread-safe (one lock, below).
+// more than `capacity` scans. close() ends the input at a shutdown: push() refuses, and pop() hands
+// out what is queued, so every scan a source handed over is mapped. stop() drops them instead and
+// releases every waiter: push() refuses and pop() returns nothing. Thread-safe (one lock, below).
 
 #include "vog/geometry/pose.hpp"
 #include "vog/slam/submap_builder.hpp"
@@ -39,8 +40,12 @@ class ScanQueue {
   void skipped();
   // Waits until every pushed scan is done(); false when stopped first.
   bool waitDrained();
+  // No more scans come; the queued ones are still popped.
+  void close();
   void stop();
   bool stopped() const;
+  // Nothing more to pop: stopped, or closed and empty.
+  bool ended() const;
   std::uint64_t notMapped() const;
 
  private:
@@ -50,6 +55,7 @@ class ScanQueue {
   std::deque<QueuedScan> queue_;  // guarded by mutex_
   std::size_t unmapped_ = 0;      // pushed and not yet done(), guarded by mutex_
   std::uint64_t not_mapped_ = 0;  // recorded only, guarded by mutex_
+  bool closed_ = false;           // guarded by mutex_
   bool stopped_ = false;          // guarded by mutex_
 };
 
