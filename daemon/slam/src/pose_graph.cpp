@@ -735,12 +735,13 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   }
   // PoseGraphConfig::attitude_from_absolute: z, roll and pitch that no relative factor measures are
   // the one absolute factor's, held.
-  std::map<NodeId, int> absolute_count;
-  for (const AbsoluteFactor& f : absolute_) ++absolute_count[f.id];
+  std::map<NodeId, int> absolute_count;  // only with the option
+  if (config_.attitude_from_absolute)
+    for (const AbsoluteFactor& f : absolute_) ++absolute_count[f.id];
   const auto attitude_held = [&](NodeId id) {
+    if (!config_.attitude_from_absolute || fixed_.count(id) != 0 || absolute_count.at(id) != 1) return false;
     const auto it = constrained.find(id);
-    const bool measured = it != constrained.end() && (it->second[kZ] || it->second[kRoll] || it->second[kPitch]);
-    return config_.attitude_from_absolute && !measured && absolute_count.at(id) == 1 && fixed_.count(id) == 0;
+    return it == constrained.end() || !(it->second[kZ] || it->second[kRoll] || it->second[kPitch]);
   };
   for (const AbsoluteFactor& f : absolute_) {
     if (!free(f.id)) continue;
