@@ -3,7 +3,9 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <queue>
 #include <sstream>
@@ -138,6 +140,11 @@ Result<TraversabilityGrid> TraversabilityGrid::build(const MergedMap& map, const
   g.assumed_free_ = assumed_free;
   g.status_.assign(static_cast<std::size_t>(n), static_cast<std::uint8_t>(map::Occupancy::kUnknown));
   g.safe_.assign(static_cast<std::size_t>(n), 0);
+  g.block_min_ = g.grid_.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
+  g.blocks_ = g.grid_.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - g.block_min_ + VoxelKey::Ones();
+  g.stale_.assign(static_cast<std::size_t>(g.blocks_.x()) * static_cast<std::size_t>(g.blocks_.y()) *
+                      static_cast<std::size_t>(g.blocks_.z()),
+                  0);
   if (assumed_free.radius_m > 0.0) {
     // Voxels of blocks the map does not hold stay at this; readBlock applies the same rule.
     const Eigen::Vector3d r = Eigen::Vector3d::Constant(assumed_free.radius_m);
@@ -167,6 +174,39 @@ bool TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
   const KeyBox clipped = intersect(b, grid_);
   if (clipped.empty()) return false;
   bool changed = false;
+  if (clipped.min == b.min && clipped.max == b.max && intersect(b, assumed_free_keys_).empty()) {
+    // The usual block (whole inside the grid, away from the assumed-free sphere): a row of 8 statuses
+    // compared and written at once. A loop closure re-merges most blocks and changes few statuses.
+    constexpr int kSide = MergedMap::kBlockSide;
+    std::array<std::uint8_t, kSide> statuses{};  // kUnknown
+    for (int zy = 0; zy < kSide * kSide; ++zy) {
+      if (block != nullptr) {
+        for (int x = 0; x < kSide; ++x) {
+          const auto i = static_cast<std::size_t>((zy << MergedMap::kBlockBits) | x);
+          statuses[static_cast<std::size_t>(x)] =
+              block->count(i) == 0 ? std::uint8_t{0}
+                                   : static_cast<std::uint8_t>(bounds_.classify(bounds_.clamp(block->sum(i))));
+        }
+      }
+      std::uint8_t* row = status_.data() + indexOf(VoxelKey(origin.x(), origin.y() + (zy & (kSide - 1)),
+                                                            origin.z() + (zy >> MergedMap::kBlockBits)));
+      if (std::memcmp(row, statuses.data(), kSide) != 0) {
+        std::memcpy(row, statuses.data(), kSide);
+        changed = true;
+      }
+    }
+  } else {
+    changed = readClippedBlock(origin, block, clipped);
+  }
+  // A contact inside reads as changed when the map says free; it stays occupied (a needless recompute).
+  for (const VoxelKey& c : contacts_)
+    if (clipped.contains(c)) status_[indexOf(c)] = static_cast<std::uint8_t>(map::Occupancy::kOccupied);
+  return changed;
+}
+
+bool TraversabilityGrid::readClippedBlock(const VoxelKey& origin, const MergedMap::Block* block,
+                                          const KeyBox& clipped) {
+  bool changed = false;
   VoxelKey k;
   for (k.z() = clipped.min.z(); k.z() <= clipped.max.z(); ++k.z())
     for (k.y() = clipped.min.y(); k.y() <= clipped.max.y(); ++k.y()) {
@@ -186,9 +226,6 @@ bool TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
         out = static_cast<std::uint8_t>(status);
       }
     }
-  // A contact inside reads as changed when the map says free; it stays occupied (a needless recompute).
-  for (const VoxelKey& c : contacts_)
-    if (clipped.contains(c)) status_[indexOf(c)] = static_cast<std::uint8_t>(map::Occupancy::kOccupied);
   return changed;
 }
 
@@ -204,7 +241,7 @@ void TraversabilityGrid::addContact(const Eigen::Vector3d& p_world) {
   recompute(dilate(around, r_));
 }
 
-void TraversabilityGrid::recompute(KeyBox region) {
+void TraversabilityGrid::recompute(KeyBox region) const {
   region = intersect(region, grid_);
   if (region.empty()) return;
   // oy: a blocked voxel within the footprint's horizontal extent, over the region widened in z; then
@@ -340,26 +377,24 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
   }
   TraversabilityUpdate stats;
   if (newer.version() == map_version_) return stats;
-  // Output blocks (8^3 voxels of the grid) to recompute, as a flag per block of the grid.
-  const VoxelKey block_min = grid_.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
-  const VoxelKey block_max = grid_.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; });
-  const VoxelKey nb = block_max - block_min + VoxelKey::Ones();
-  std::vector<std::uint8_t> dirty(
-      static_cast<std::size_t>(nb.x()) * static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(nb.z()), 0);
+  // The blocks of the grid whose safe flags a changed status may reach go stale (settle()).
   auto markAround = [&](const VoxelKey& origin) {
     KeyBox b;
     b.min = origin;
     b.max = origin + VoxelKey::Constant(MergedMap::kBlockSide - 1);
     const KeyBox touched = intersect(dilate(b, r_), grid_);
     if (touched.empty()) return;
-    const VoxelKey lo = touched.min.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - block_min;
-    const VoxelKey hi = touched.max.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - block_min;
+    const VoxelKey lo = blockOf(touched.min);
+    const VoxelKey hi = blockOf(touched.max);
     for (int z = lo.z(); z <= hi.z(); ++z)
       for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int x = lo.x(); x <= hi.x(); ++x)
-          dirty[static_cast<std::size_t>(x) +
-                static_cast<std::size_t>(nb.x()) *
-                    (static_cast<std::size_t>(y) + static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(z))] = 1;
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          std::uint8_t& flag = stale_[blockIndex(VoxelKey(x, y, z))];
+          if (flag != 0) continue;
+          flag = 1;
+          ++stale_count_;
+          ++stats.blocks_stale;
+        }
   };
   auto touchesGrid = [&](const VoxelKey& origin) {
     KeyBox b;
@@ -380,40 +415,6 @@ Result<TraversabilityUpdate> TraversabilityGrid::update(const MergedMap& newer) 
     if (readBlock(origin, block.get())) markAround(origin);
     ++stats.blocks_read;
   }
-  // Recompute the dirty blocks in runs along the grid's longest axis: each run's bounding box in one
-  // pass (the separable filter's margins paid once per run instead of per block), runs split where a
-  // slice across that axis holds no dirty block, so changes at the two ends of a long box do not make
-  // one box spanning it. The runs are disjoint: the cost never exceeds a rebuild.
-  int axis = 0;
-  for (int i = 1; i < 3; ++i)
-    if (nb[i] > nb[axis]) axis = i;
-  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-  KeyBox run;
-  auto flush = [&] {
-    if (run.empty()) return;
-    recompute(run);
-    const VoxelKey blocks = (run.max - run.min) / MergedMap::kBlockSide + VoxelKey::Ones();
-    stats.blocks_recomputed += blocks.x() * blocks.y() * blocks.z();
-    run = KeyBox{};
-  };
-  VoxelKey k;
-  for (int slice = 0; slice < nb[axis]; ++slice) {
-    bool any = false;
-    k[axis] = slice;
-    for (k[a2] = 0; k[a2] < nb[a2]; ++k[a2])
-      for (k[a1] = 0; k[a1] < nb[a1]; ++k[a1]) {
-        if (dirty[static_cast<std::size_t>(k.x()) +
-                  static_cast<std::size_t>(nb.x()) *
-                      (static_cast<std::size_t>(k.y()) +
-                       static_cast<std::size_t>(nb.y()) * static_cast<std::size_t>(k.z()))] == 0)
-          continue;
-        const VoxelKey lo = (block_min + k) * MergedMap::kBlockSide;
-        run.extend(lo, lo + VoxelKey::Constant(MergedMap::kBlockSide - 1));
-        any = true;
-      }
-    if (!any) flush();
-  }
-  flush();
   map_version_ = newer.version();
   return stats;
 }
@@ -474,8 +475,86 @@ std::optional<Eigen::Vector3d> TraversabilityGrid::nearestSafeClearOfOccupied(co
   return std::nullopt;
 }
 
+VoxelKey TraversabilityGrid::blockOf(const VoxelKey& key) const {
+  return key.unaryExpr([](int v) { return v >> MergedMap::kBlockBits; }) - block_min_;
+}
+
+std::size_t TraversabilityGrid::blockIndex(const VoxelKey& block) const {
+  return static_cast<std::size_t>(block.x()) +
+         static_cast<std::size_t>(blocks_.x()) *
+             (static_cast<std::size_t>(block.y()) +
+              static_cast<std::size_t>(blocks_.y()) * static_cast<std::size_t>(block.z()));
+}
+
+KeyBox TraversabilityGrid::blockKeys(const VoxelKey& block) const {
+  KeyBox b;
+  b.min = (block_min_ + block) * MergedMap::kBlockSide;
+  b.max = b.min + VoxelKey::Constant(MergedMap::kBlockSide - 1);
+  return b;
+}
+
+void TraversabilityGrid::settle(const VoxelKey& key) const {
+  if (stale_count_ == 0) return;
+  const VoxelKey block = blockOf(key);
+  if (stale_[blockIndex(block)] == 0) return;
+  // The stale blocks of the aligned group of kSettleBlocks^3 blocks around it, in one recompute: the
+  // filter's margins are paid once for the group.
+  const VoxelKey g0 = block.unaryExpr([](int v) { return v / kSettleBlocks * kSettleBlocks; });
+  const VoxelKey g1 = (g0 + VoxelKey::Constant(kSettleBlocks - 1)).cwiseMin(blocks_ - VoxelKey::Ones());
+  KeyBox region;
+  VoxelKey b;
+  for (b.z() = g0.z(); b.z() <= g1.z(); ++b.z())
+    for (b.y() = g0.y(); b.y() <= g1.y(); ++b.y())
+      for (b.x() = g0.x(); b.x() <= g1.x(); ++b.x()) {
+        std::uint8_t& flag = stale_[blockIndex(b)];
+        if (flag == 0) continue;
+        flag = 0;
+        --stale_count_;
+        const KeyBox keys = blockKeys(b);
+        region.extend(keys.min, keys.max);
+      }
+  recompute(region);
+}
+
+void TraversabilityGrid::settleAll() const {
+  if (stale_count_ == 0) return;
+  // In runs along the grid's longest axis: each run's bounding box in one pass (the separable filter's
+  // margins paid once per run instead of per block), runs split where a slice across that axis holds
+  // no stale block, so changes at the two ends of a long box do not make one box spanning it. The runs
+  // are disjoint: the cost never exceeds a rebuild.
+  int axis = 0;
+  for (int i = 1; i < 3; ++i)
+    if (blocks_[i] > blocks_[axis]) axis = i;
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  KeyBox run;
+  auto flush = [&] {
+    if (run.empty()) return;
+    recompute(run);
+    run = KeyBox{};
+  };
+  VoxelKey k;
+  for (int slice = 0; slice < blocks_[axis]; ++slice) {
+    bool any = false;
+    k[axis] = slice;
+    for (k[a2] = 0; k[a2] < blocks_[a2]; ++k[a2])
+      for (k[a1] = 0; k[a1] < blocks_[a1]; ++k[a1]) {
+        std::uint8_t& flag = stale_[blockIndex(k)];
+        if (flag == 0) continue;
+        flag = 0;
+        const KeyBox keys = blockKeys(k);
+        run.extend(keys.min, keys.max);
+        any = true;
+      }
+    if (!any) flush();
+  }
+  flush();
+  stale_count_ = 0;
+}
+
 bool TraversabilityGrid::isSafeKey(const VoxelKey& key) const {
-  return grid_.contains(key) && safe_[indexOf(key)] != 0;
+  if (!grid_.contains(key)) return false;
+  settle(key);
+  return safe_[indexOf(key)] != 0;
 }
 
 bool TraversabilityGrid::isSafe(const Eigen::Vector3d& p) const {
@@ -600,10 +679,13 @@ std::vector<VoxelKey> TraversabilityGrid::reachable(const Eigen::Vector3d& from_
 }
 
 std::size_t TraversabilityGrid::safeCount() const {
+  settleAll();
   return static_cast<std::size_t>(std::count(safe_.begin(), safe_.end(), std::uint8_t{1}));
 }
 
 bool TraversabilityGrid::sameFlags(const TraversabilityGrid& other) const {
+  settleAll();
+  other.settleAll();
   return grid_.min == other.grid_.min && grid_.max == other.grid_.max && safe_ == other.safe_ &&
          status_ == other.status_;
 }

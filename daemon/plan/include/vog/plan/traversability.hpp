@@ -60,9 +60,9 @@ struct AssumedFree {
 };
 
 struct TraversabilityUpdate {
-  bool rebuilt = false;       // the snapshot was not a descendant: rebuilt from scratch
-  int blocks_read = 0;        // changed or removed map blocks that touch the grid
-  int blocks_recomputed = 0;  // 8^3 blocks in the boxes of recomputed safe flags
+  bool rebuilt = false;  // the snapshot was not a descendant: rebuilt from scratch
+  int blocks_read = 0;   // changed or removed map blocks that touch the grid
+  int blocks_stale = 0;  // 8^3 blocks of the grid whose safe flags went stale (recomputed when read)
 };
 
 class TraversabilityGrid {
@@ -145,8 +145,21 @@ class TraversabilityGrid {
   // Copies the status of one map block (nullptr: entirely unknown) into status_; true when a status
   // in the grid changed.
   bool readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
+  // readBlock's voxel by voxel form, for the part `clipped` of a block at the grid's edge or near the
+  // assumed-free sphere.
+  bool readClippedBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block,
+                        const map::KeyBox& clipped);
   // Recomputes safe_ inside `region` (clipped to the grid) from status_.
-  void recompute(map::KeyBox region);
+  void recompute(map::KeyBox region) const;
+  // Blocks of the grid (8^3 voxels aligned as the map's blocks): coordinates from block_min_, index
+  // into stale_, keys.
+  map::VoxelKey blockOf(const map::VoxelKey& key) const;
+  std::size_t blockIndex(const map::VoxelKey& block) const;
+  map::KeyBox blockKeys(const map::VoxelKey& block) const;
+  // Recomputes the safe flags of the stale block holding `key` (in the grid) with the other stale
+  // blocks of its group; settleAll() every stale block.
+  void settle(const map::VoxelKey& key) const;
+  void settleAll() const;
 
   double resolution_ = 0.0;
   AssumedFree assumed_free_;
@@ -159,8 +172,17 @@ class TraversabilityGrid {
   Eigen::Vector3i r_ = Eigen::Vector3i::Zero();  // inflation radius in voxels per axis
   std::vector<int> disc_half_width_;             // a cylinder: x half-width per |dy| in [0, r_.y()]; empty: a box
   std::vector<std::uint8_t> status_;             // map::Occupancy per voxel
-  std::vector<std::uint8_t> safe_;               // 1 = a box centred in this voxel is in known free space
-  std::vector<map::VoxelKey> contacts_;          // addContact(), inside grid_
+  // Safe flags are recomputed lazily: update() marks the blocks a changed status may reach stale, and
+  // the queries recompute a stale block when they first read it, so a plan after a loop closure pays
+  // for the part of the grid it looks at. The queries are const and write these: a grid is used by one
+  // thread at a time (the planner's).
+  static constexpr int kSettleBlocks = 4;
+  mutable std::vector<std::uint8_t> safe_;           // 1 = a box centred in this voxel is in known free space
+  mutable std::vector<std::uint8_t> stale_;          // per block of the grid: its safe flags wait for settle()
+  mutable std::size_t stale_count_ = 0;              // blocks flagged in stale_
+  map::VoxelKey block_min_ = map::VoxelKey::Zero();  // the grid's first block (map block coordinates)
+  map::VoxelKey blocks_ = map::VoxelKey::Zero();     // blocks of the grid per axis
+  std::vector<map::VoxelKey> contacts_;              // addContact(), inside grid_
   std::uint64_t map_version_ = 0;
   std::uint64_t map_writer_ = 0;  // MergedMap::writerId() of the snapshots this grid reflects
 };
