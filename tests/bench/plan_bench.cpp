@@ -77,7 +77,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
   std::vector<double> build_ms;
   std::vector<double> update_ms;
   std::vector<double> rebuild_ms;
-  std::vector<double> recomputed_blocks;
+  std::vector<double> stale_blocks;
   std::vector<double> closure_update_ms;
   std::vector<double> closure_settle_ms;
   std::vector<double> closure_blocks_read;
@@ -95,7 +95,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
       const bench::Stopwatch su;
       const auto stats = grid.update(*after).value();
       update_ms.push_back(su.seconds() * 1e3);
-      recomputed_blocks.push_back(stats.blocks_stale);
+      stale_blocks.push_back(stats.blocks_stale);
       const bench::Stopwatch sr;
       const auto scratch = plan::TraversabilityGrid::build(*after, box, checked_box).value();
       rebuild_ms.push_back(sr.seconds() * 1e3);
@@ -234,7 +234,7 @@ VOG_BENCH_COMMAND(plan, "NBV planner: plan time on a many-submap map, traversabi
   out.add("traversability_update_ms", bench::median(update_ms));
   out.add("traversability_update_ms_p95", bench::percentile(update_ms, 0.95));
   out.add("traversability_rebuild_ms", bench::median(rebuild_ms));
-  out.add("traversability_update_blocks", bench::median(recomputed_blocks));
+  out.add("traversability_update_blocks", bench::median(stale_blocks));
   out.add("traversability_update_after_closure_ms", bench::median(closure_update_ms));
   out.add("traversability_settle_all_after_closure_ms", bench::median(closure_settle_ms));
   out.add("traversability_update_after_closure_blocks_read", bench::median(closure_blocks_read));

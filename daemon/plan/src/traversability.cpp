@@ -183,9 +183,7 @@ bool TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
       if (block != nullptr) {
         for (int x = 0; x < kSide; ++x) {
           const auto i = static_cast<std::size_t>((zy << MergedMap::kBlockBits) | x);
-          statuses[static_cast<std::size_t>(x)] =
-              block->count(i) == 0 ? std::uint8_t{0}
-                                   : static_cast<std::uint8_t>(bounds_.classify(bounds_.clamp(block->sum(i))));
+          statuses[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(statusOf(*block, i));
         }
       }
       std::uint8_t* row = status_.data() + indexOf(VoxelKey(origin.x(), origin.y() + (zy & (kSide - 1)),
@@ -204,6 +202,11 @@ bool TraversabilityGrid::readBlock(const VoxelKey& origin, const MergedMap::Bloc
   return changed;
 }
 
+map::Occupancy TraversabilityGrid::statusOf(const MergedMap::Block& block, std::size_t i) const {
+  // The classification MergedMap::at makes: clamp, then threshold (thesis Eq. 3.4-3.5).
+  return block.count(i) == 0 ? map::Occupancy::kUnknown : bounds_.classify(bounds_.clamp(block.sum(i)));
+}
+
 bool TraversabilityGrid::readClippedBlock(const VoxelKey& origin, const MergedMap::Block* block,
                                           const KeyBox& clipped) {
   bool changed = false;
@@ -215,11 +218,7 @@ bool TraversabilityGrid::readClippedBlock(const VoxelKey& origin, const MergedMa
           ((k.z() - origin.z()) << (2 * MergedMap::kBlockBits)) | ((k.y() - origin.y()) << MergedMap::kBlockBits);
       for (k.x() = clipped.min.x(); k.x() <= clipped.max.x(); ++k.x()) {
         map::Occupancy status = map::Occupancy::kUnknown;
-        if (block != nullptr) {
-          const auto i = static_cast<std::size_t>(block_row + (k.x() - origin.x()));
-          // The classification MergedMap::at makes: clamp, then threshold (thesis Eq. 3.4-3.5).
-          if (block->count(i) != 0) status = bounds_.classify(bounds_.clamp(block->sum(i)));
-        }
+        if (block != nullptr) status = statusOf(*block, static_cast<std::size_t>(block_row + (k.x() - origin.x())));
         if (status == map::Occupancy::kUnknown && assumedFree(k)) status = map::Occupancy::kFree;
         std::uint8_t& out = row[k.x() - clipped.min.x()];
         changed = changed || out != static_cast<std::uint8_t>(status);

@@ -145,6 +145,8 @@ class TraversabilityGrid {
   // Copies the status of one map block (nullptr: entirely unknown) into status_; true when a status
   // in the grid changed.
   bool readBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block);
+  // The status of voxel i of a map block.
+  map::Occupancy statusOf(const map::MergedMap::Block& block, std::size_t i) const;
   // readBlock's voxel by voxel form, for the part `clipped` of a block at the grid's edge or near the
   // assumed-free sphere.
   bool readClippedBlock(const map::VoxelKey& block_origin, const map::MergedMap::Block* block,
