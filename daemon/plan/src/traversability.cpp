@@ -656,6 +656,9 @@ Result<std::vector<Eigen::Vector3d>> TraversabilityGrid::findPath(const Eigen::V
 std::vector<VoxelKey> TraversabilityGrid::reachable(const Eigen::Vector3d& from_world, std::size_t max_voxels) const {
   std::vector<VoxelKey> order;
   if (!isSafe(from_world) || max_voxels == 0) return order;
+  // A search that may walk the whole grid reads nearly every block: one settleAll() pays the filter's
+  // margins once per run instead of once per group of blocks the walk enters.
+  if (max_voxels >= safe_.size()) settleAll();
   std::vector<std::uint8_t> seen(safe_.size(), 0);
   const VoxelKey start = map::pointToKey(from_world, inv_resolution_);
   seen[indexOf(start)] = 1;

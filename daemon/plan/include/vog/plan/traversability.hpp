@@ -103,7 +103,7 @@ class TraversabilityGrid {
     return grid_.contains(key) ? static_cast<map::Occupancy>(status_[indexOf(key)]) : map::Occupancy::kUnknown;
   }
 
-  // A shortest 26-connected path of safe voxels from `from` to `to` (A*, Hart 1968), shortened by
+  // A shortest 6-connected path of safe voxels (face neighbours) from `from` to `to` (A*, Hart 1968), shortened by
   // dropping waypoints while the direct edge stays free. Starts at `from`, ends at `to`; an error when
   // either end is not safe or no path exists.
   Result<std::vector<Eigen::Vector3d>> findPath(const Eigen::Vector3d& from_world,
