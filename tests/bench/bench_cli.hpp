@@ -64,6 +64,9 @@ inline void addLoopClosureOptions(CLI::App& app, slam::MappingPipelineConfig& mc
                  "loop closures: shifts per side of the unique-optimum probe (0: no probe, the default; 3 measured)");
   app.add_option("--lc-probe-min-cost-points", lc.point_to_plane.min_probe_cost_points,
                  "loop closures: correspondences' worth of cost every probe shift must add");
+  app.add_option("--lc-max-revisits", lc.max_revisits,
+                 "loop closures: register the candidates of at most this many revisits of the place, the oldest and "
+                 "the newest (0: all)");
   app.add_option("--lc-max-registrations", lc.max_registrations,
                  "loop closures: at most this many registrations per new submap, the nearest candidates (0: all)")
       ->check(CLI::Range(0, 100'000));

@@ -1031,6 +1031,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
   out.add("closures_tried", static_cast<std::int64_t>(lc.tried));
   out.add("closures_skipped_heading", static_cast<std::int64_t>(lc.skipped_heading));
   out.add("closures_skipped_budget", static_cast<std::int64_t>(lc.skipped_budget));
+  out.add("closures_skipped_revisits", static_cast<std::int64_t>(lc.skipped_revisits));
   out.add("closure_directions_ambiguous", static_cast<std::int64_t>(lc.ambiguous_directions));
   std::string reasons;
   for (const auto& [reason, n] : lc.rejected_by_reason)

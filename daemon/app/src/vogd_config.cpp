@@ -107,6 +107,8 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   l.degrees("max_heading_difference_deg", lc.max_heading_difference_rad, 1.0, 180.0);
   l.degrees("max_yaw_disagreement_deg", lc.max_yaw_disagreement_rad, 0.1, 180.0);
   l.integer("max_registrations", lc.max_registrations, 0, 100'000);
+  l.integer("max_revisits", lc.max_revisits, 0, 100'000);
+  l.integer("revisit_gap", lc.revisit_gap, 1, 100'000);
   l.number("min_overlap_fraction", lc.min_overlap_fraction, 0.0, 1.0);
   l.number("p2p_min_overlap_fraction", lc.p2p_min_overlap_fraction, 0.0, 1.0);
   l.number("odometry_cov_x_m2_per_s", lc.acceptance.odometry_cov_x_m2_per_s, 1e-9, 10.0);

@@ -63,6 +63,11 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: max_yaw_disagreement_rad = " + std::to_string(max_yaw_disagreement_rad) +
                  " must be in (0, pi]"};
   }
+  if (max_revisits < 0 || max_revisits == 1 || revisit_gap < 1) {
+    return Error{"loop closer config: max_revisits = " + std::to_string(max_revisits) +
+                 " must be 0 (no limit) or >= 2 (the oldest and the newest), revisit_gap = " +
+                 std::to_string(revisit_gap) + " >= 1"};
+  }
   if (max_registrations < 0) {
     return Error{"loop closer config: max_registrations = " + std::to_string(max_registrations) +
                  " must be >= 0 (0: no limit)"};
@@ -94,6 +99,7 @@ void LoopCloseStats::add(const LoopCloseStats& other) {
   rejected += other.rejected;
   skipped_heading += other.skipped_heading;
   skipped_budget += other.skipped_budget;
+  skipped_revisits += other.skipped_revisits;
   ambiguous_directions += other.ambiguous_directions;
   switched_off += other.switched_off;
   switched_on += other.switched_on;
@@ -198,6 +204,20 @@ LoopCloseOutcome LoopCloser::registerCandidates(
       continue;
     }
     gated.push_back(k);
+  }
+  if (config_.max_revisits > 0 && !gated.empty()) {
+    // Runs of candidates in ascending index; keep the first run and the newest max_revisits - 1.
+    std::vector<std::size_t> run_start{0};
+    for (std::size_t i = 1; i < gated.size(); ++i)
+      if (submaps[gated[i]].index - submaps[gated[i - 1]].index > config_.revisit_gap) run_start.push_back(i);
+    const auto runs = static_cast<std::size_t>(config_.max_revisits);
+    if (run_start.size() > runs) {
+      const std::size_t first_end = run_start[1];
+      const std::size_t newest_begin = run_start[run_start.size() - (runs - 1)];
+      out.stats.skipped_revisits = static_cast<int>(newest_begin - first_end);
+      gated.erase(gated.begin() + static_cast<std::ptrdiff_t>(first_end),
+                  gated.begin() + static_cast<std::ptrdiff_t>(newest_begin));
+    }
   }
   const auto budget = static_cast<std::size_t>(config_.max_registrations);
   if (budget > 0 && gated.size() > budget) {

@@ -86,6 +86,8 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_NEAR(la.max_heading_difference_rad, lb.max_heading_difference_rad, 1e-4);
   EXPECT_NEAR(la.max_yaw_disagreement_rad, lb.max_yaw_disagreement_rad, 1e-4);
   EXPECT_EQ(la.max_registrations, lb.max_registrations);
+  EXPECT_EQ(la.max_revisits, lb.max_revisits);
+  EXPECT_EQ(la.revisit_gap, lb.revisit_gap);
   EXPECT_EQ(la.min_overlap_fraction, lb.min_overlap_fraction);
   EXPECT_EQ(la.p2p_min_overlap_fraction, lb.p2p_min_overlap_fraction);
   EXPECT_EQ(la.acceptance.odometry_cov_x_m2_per_s, lb.acceptance.odometry_cov_x_m2_per_s);

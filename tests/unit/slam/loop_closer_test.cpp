@@ -173,6 +173,51 @@ TEST(LoopCloser, TheRegistrationBudgetTriesTheNearestCandidates) {
   EXPECT_NE(refused.error().message.find("max_registrations"), std::string::npos) << refused.error().message;
 }
 
+// max_revisits: of the runs of candidates with consecutive indices (one pass over the place each),
+// only the oldest and the newest are registered, the others counted as skipped. Earlier views of the
+// same stretch as submaps 0 and 1, 10, 20 and 30; the new one is 40.
+TEST(LoopCloser, TheRevisitLimitTriesTheOldestAndTheNewestRuns) {
+  const auto orbit = test::orbitTrajectory(80, 5.5, -2.0);
+  const std::vector<geometry::Pose3> stretch(orbit.begin(), orbit.begin() + 80);
+  const auto earlier = gridOf(stretch, 1);
+  std::vector<LoopSubmap> submaps;
+  for (const std::int64_t index : {0, 1, 10, 20, 30})
+    submaps.push_back({index, earlier, stretch.front(), index * 20'000'000'000});
+  submaps.push_back({40, gridOf(stretch, 2), stretch.front(), 800'000'000'000});
+  const auto run = [&](int max_revisits, int gap) {
+    LoopCloserConfig c;
+    c.point_to_plane.max_correspondence_distance_m = 0.5;
+    c.max_revisits = max_revisits;
+    c.revisit_gap = gap;
+    auto closer = LoopCloser::create(c);
+    EXPECT_TRUE(closer.ok()) << closer.error().message;
+    auto out = closer->closeLoops(submaps, submaps.size() - 1);
+    EXPECT_TRUE(out.ok()) << out.error().message;
+    std::vector<std::int64_t> from;
+    for (const LoopClosure& lc : out->closures) from.push_back(lc.from);
+    return std::make_pair(from, *out);
+  };
+  const std::vector<std::int64_t> all = {0, 1, 10, 20, 30};
+  EXPECT_EQ(run(0, 3).first, all);
+  const auto [three, three_out] = run(3, 3);
+  EXPECT_EQ(three, (std::vector<std::int64_t>{0, 1, 20, 30}));
+  EXPECT_EQ(three_out.stats.tried, 4);
+  EXPECT_EQ(three_out.stats.skipped_revisits, 1);
+  const auto [two, two_out] = run(2, 3);
+  EXPECT_EQ(two, (std::vector<std::int64_t>{0, 1, 30}));
+  EXPECT_EQ(two_out.stats.skipped_revisits, 2);
+  EXPECT_EQ(run(2, 10).first, all) << "gaps of 10 make one run";
+  EXPECT_EQ(run(6, 3).first, all) << "fewer runs than the limit";
+  for (const auto& [revisits, gap] : {std::pair<int, int>{1, 3}, {-1, 3}, {2, 0}}) {
+    LoopCloserConfig bad;
+    bad.max_revisits = revisits;
+    bad.revisit_gap = gap;
+    auto refused = LoopCloser::create(bad);
+    ASSERT_FALSE(refused.ok()) << revisits << " " << gap;
+    EXPECT_NE(refused.error().message.find("max_revisits"), std::string::npos) << refused.error().message;
+  }
+}
+
 TEST(LoopCloser, ConsecutiveAndOppositeViewsAreNotTried) {
   const auto orbit = test::orbitTrajectory(40, 5.5, -2.0);
   const auto grid = gridOf(orbit, 1);

@@ -65,6 +65,14 @@ struct LoopCloserConfig {
   // pass adds candidates, and the registrations would make the mapping time per submap grow with the
   // mission (docs/long-mission).
   int max_registrations = 0;
+  // At most this many revisits per new submap (0: every one). A revisit is a run of candidates whose
+  // submap indices follow one another with gaps of at most revisit_gap (one pass over the place); the
+  // oldest run and the max_revisits - 1 newest are registered. A repeated survey otherwise ties each
+  // new submap to every earlier pass over the place, and the pose graph's normal equations fill in
+  // with the passes (docs/long-mission); with the oldest and the newest, each pass is tied to the one
+  // before it and to the first. Applied before max_registrations.
+  int max_revisits = 0;
+  int revisit_gap = 3;
   // Fraction of the source cloud that must find a correspondence within the ICP's final bound at the
   // result (overlap): 0.3 within the point-to-plane ICP's 0.3 m. The point-to-point mode counts
   // within its fixed 1 m and keeps its own bound (at 0.3 a wrong closure passed in
@@ -119,6 +127,7 @@ struct LoopCloseStats {
   std::map<std::string, int> rejected_by_reason;  // cause -> count
   int skipped_heading = 0;                        // candidates skipped by the viewing-direction gate (not tried)
   int skipped_budget = 0;                         // candidates beyond max_registrations (not tried)
+  int skipped_revisits = 0;                       // candidates of revisits beyond max_revisits (not tried)
   int ambiguous_directions = 0;                   // directions of tried registrations the probe dropped
   int switched_off = 0;                           // accepted closures the consistency re-check switched off
   int switched_on = 0;                            // ... and on again
