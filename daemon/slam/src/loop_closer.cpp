@@ -20,6 +20,22 @@ std::string reasonKey(const IcpResult& r, const IcpAcceptance& a) {
   return "acceptance";
 }
 
+// LoopCloserConfig::max_revisits: `candidates` (positions in `submaps`, ascending) split into runs
+// whose indices differ by at most `gap`; all but the first run and the newest max_revisits - 1 are
+// erased. Returns how many were erased.
+int dropMiddleRevisits(const std::vector<LoopSubmap>& submaps, int max_revisits, int gap,
+                       std::vector<std::size_t>& candidates) {
+  std::vector<std::size_t> run_start;
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (i == 0 || submaps[candidates[i]].index - submaps[candidates[i - 1]].index > gap) run_start.push_back(i);
+  const auto runs = static_cast<std::size_t>(max_revisits);
+  if (run_start.size() <= runs) return 0;
+  const auto first_end = static_cast<std::ptrdiff_t>(run_start[1]);
+  const auto newest_begin = static_cast<std::ptrdiff_t>(run_start[run_start.size() - (runs - 1)]);
+  candidates.erase(candidates.begin() + first_end, candidates.begin() + newest_begin);
+  return static_cast<int>(newest_begin - first_end);
+}
+
 }  // namespace
 
 SubmapFootprint footprintOf(const LoopSubmap& s) {
@@ -205,19 +221,8 @@ LoopCloseOutcome LoopCloser::registerCandidates(
     }
     gated.push_back(k);
   }
-  if (config_.max_revisits > 0 && !gated.empty()) {
-    // Runs of candidates in ascending index; keep the first run and the newest max_revisits - 1.
-    std::vector<std::size_t> run_start{0};
-    for (std::size_t i = 1; i < gated.size(); ++i)
-      if (submaps[gated[i]].index - submaps[gated[i - 1]].index > config_.revisit_gap) run_start.push_back(i);
-    const auto runs = static_cast<std::size_t>(config_.max_revisits);
-    if (run_start.size() > runs) {
-      const std::size_t first_end = run_start[1];
-      const std::size_t newest_begin = run_start[run_start.size() - (runs - 1)];
-      out.stats.skipped_revisits = static_cast<int>(newest_begin - first_end);
-      gated.erase(gated.begin() + static_cast<std::ptrdiff_t>(first_end),
-                  gated.begin() + static_cast<std::ptrdiff_t>(newest_begin));
-    }
+  if (config_.max_revisits > 0) {
+    out.stats.skipped_revisits = dropMiddleRevisits(submaps, config_.max_revisits, config_.revisit_gap, gated);
   }
   const auto budget = static_cast<std::size_t>(config_.max_registrations);
   if (budget > 0 && gated.size() > budget) {
