@@ -79,10 +79,12 @@ Status LoopCloserConfig::validate() const {
     return Error{"loop closer config: max_yaw_disagreement_rad = " + std::to_string(max_yaw_disagreement_rad) +
                  " must be in (0, pi]"};
   }
-  if (max_revisits < 0 || max_revisits == 1 || revisit_gap < 1) {
+  if (max_revisits < 0 || max_revisits == 1) {
     return Error{"loop closer config: max_revisits = " + std::to_string(max_revisits) +
-                 " must be 0 (no limit) or >= 2 (the oldest and the newest), revisit_gap = " +
-                 std::to_string(revisit_gap) + " >= 1"};
+                 " must be 0 (no limit) or >= 2 (the oldest and the newest)"};
+  }
+  if (revisit_gap < 1) {
+    return Error{"loop closer config: revisit_gap = " + std::to_string(revisit_gap) + " must be >= 1"};
   }
   if (max_registrations < 0) {
     return Error{"loop closer config: max_registrations = " + std::to_string(max_registrations) +

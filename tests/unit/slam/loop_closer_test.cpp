@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 
 namespace vog::slam {
 namespace {
@@ -208,13 +209,19 @@ TEST(LoopCloser, TheRevisitLimitTriesTheOldestAndTheNewestRuns) {
   EXPECT_EQ(two_out.stats.skipped_revisits, 2);
   EXPECT_EQ(run(2, 10).first, all) << "gaps of 10 make one run";
   EXPECT_EQ(run(6, 3).first, all) << "fewer runs than the limit";
-  for (const auto& [revisits, gap] : {std::pair<int, int>{1, 3}, {-1, 3}, {2, 0}}) {
+  // The error names the key that is wrong.
+  for (const auto& [revisits, gap, key] : {std::tuple<int, int, const char*>{1, 3, "max_revisits = 1"},
+                                           {-1, 3, "max_revisits = -1"},
+                                           {2, 0, "revisit_gap = 0"}}) {
     LoopCloserConfig bad;
     bad.max_revisits = revisits;
     bad.revisit_gap = gap;
     auto refused = LoopCloser::create(bad);
     ASSERT_FALSE(refused.ok()) << revisits << " " << gap;
-    EXPECT_NE(refused.error().message.find("max_revisits"), std::string::npos) << refused.error().message;
+    EXPECT_NE(refused.error().message.find(key), std::string::npos) << refused.error().message;
+    if (gap >= 1) {
+      EXPECT_EQ(refused.error().message.find("revisit_gap"), std::string::npos) << refused.error().message;
+    }
   }
 }
 
