@@ -142,39 +142,90 @@ TEST_F(MergedMapTest, SnapshotsNeverChange) {
   for (const auto& [origin, block] : changed) EXPECT_GT(block->version, v);
 }
 
-// A remote copy taken at one version catches up from the changed and removed blocks alone.
-TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
-  auto merged = MergedMap::create(config_).value();
-  const auto entries = vog_->entries();
-  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
-  std::map<std::tuple<int, int, int>, MergedMap::Block> mirror;
-  for (const auto& [origin, block] : merged->blocksChangedSince(0))
-    mirror[{origin.x(), origin.y(), origin.z()}] = *block;
-  const std::uint64_t seen = merged->version();
+// A remote copy of the merged map: blocks by origin.
+using Mirror = std::map<std::tuple<int, int, int>, MergedMap::Block>;
 
-  ASSERT_TRUE(merged->remove(entries[0].id).ok());
-  for (std::size_t i = 3; i < entries.size(); ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
-  const auto removed = merged->blocksRemovedSince(seen);
-  EXPECT_GT(removed.size(), 0u);
-  for (const auto& origin : removed) mirror.erase({origin.x(), origin.y(), origin.z()});
-  for (const auto& [origin, block] : merged->blocksChangedSince(seen))
+// Brings a copy taken at version `since` up to date from the removed and changed blocks alone.
+void catchUp(Mirror& mirror, const MergedMap& merged, std::uint64_t since) {
+  for (const auto& origin : merged.blocksRemovedSince(since)) mirror.erase({origin.x(), origin.y(), origin.z()});
+  for (const auto& [origin, block] : merged.blocksChangedSince(since))
     mirror[{origin.x(), origin.y(), origin.z()}] = *block;
+}
 
+void expectMirrors(const Mirror& mirror, const MergedMap& merged, const GridConfig& config) {
   std::size_t known = 0;
   for (const auto& [origin, block] : mirror) {
     known += block.n_known;
     for (int i = 0; i < MergedMap::kBlockVoxels; ++i) {
       const VoxelKey k = VoxelKey(std::get<0>(origin), std::get<1>(origin), std::get<2>(origin)) +
                          VoxelKey(i & 7, (i >> 3) & 7, i >> 6);
-      const VoxelValue v = merged->at(k);
+      const VoxelValue v = merged.at(k);
       ASSERT_EQ(v.status == Occupancy::kUnknown, block.count(static_cast<std::size_t>(i)) == 0);
       if (v.status != Occupancy::kUnknown) {
-        ASSERT_EQ(v.log_odds, config_.bounds().clamp(block.sum(static_cast<std::size_t>(i))));
+        ASSERT_EQ(v.log_odds, config.bounds().clamp(block.sum(static_cast<std::size_t>(i))));
       }
     }
   }
-  EXPECT_EQ(known, merged->knownVoxelCount());
-  EXPECT_EQ(mirror.size(), merged->blockCount());
+  EXPECT_EQ(known, merged.knownVoxelCount());
+  EXPECT_EQ(mirror.size(), merged.blockCount());
+}
+
+// A remote copy taken at one version catches up from the changed and removed blocks alone.
+TEST_F(MergedMapTest, ChangedAndRemovedBlocksBringACopyUpToDate) {
+  auto merged = MergedMap::create(config_).value();
+  const auto entries = vog_->entries();
+  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
+  Mirror mirror;
+  catchUp(mirror, *merged, 0);
+  const std::uint64_t seen = merged->version();
+
+  ASSERT_TRUE(merged->remove(entries[0].id).ok());
+  for (std::size_t i = 3; i < entries.size(); ++i) ASSERT_TRUE(merged->add(entries[i]).ok());
+  EXPECT_GT(merged->blocksRemovedSince(seen).size(), 0u);
+  catchUp(mirror, *merged, seen);
+  expectMirrors(mirror, *merged, config_);
+}
+
+// A loop closure late in a survey moves many submaps by millimetres. Each is moved in one pass that
+// changes only the voxels entering or leaving its leaves: the map stays equal to one merged from
+// scratch and to the sequential query, and a remote copy still catches up from the changed blocks.
+TEST_F(MergedMapTest, MillimetreMovesEqualFromScratchAndBringACopyUpToDate) {
+  const MergeConfig exact{0.0, 0.0};
+  auto merged = mergeFromScratch();
+  Mirror mirror;
+  catchUp(mirror, *merged, 0);
+  std::uint64_t seen = merged->version();
+  std::mt19937_64 rng(5);
+  for (std::size_t round = 0; round < 4; ++round) {
+    SCOPED_TRACE(round);
+    auto poses = vog_->poses();
+    for (std::size_t k = round % 2; k < poses.size(); k += 2)
+      poses[k] = test_fixtures::perturb(poses[k], 0.006, 0.0008, rng);
+    ASSERT_TRUE(vog_->deform(poses).ok());
+    const auto stats = merged->sync(vog_->entries(), exact);
+    ASSERT_TRUE(stats.ok());
+    EXPECT_EQ(stats->remerged, 3);
+    EXPECT_EQ(merged->version(), seen + 3);  // one version per moved submap: moved, not rebuilt
+    catchUp(mirror, *merged, seen);
+    seen = merged->version();
+    expectMirrors(mirror, *merged, config_);
+  }
+  EXPECT_TRUE(merged->sameVoxels(*mergeFromScratch()));
+  expectMergedEqualsSequential(*merged);
+}
+
+// A submap whose grid was replaced under the same id is merged out with its old grid and in with its
+// new one.
+TEST_F(MergedMapTest, ASubmapWithANewGridIsMergedOutAndIn) {
+  auto merged = mergeFromScratch();
+  std::vector<SubmapEntry> entries = vog_->entries();
+  entries[1].grid = entries[2].grid;
+  const auto stats = merged->sync(entries, MergeConfig{});
+  ASSERT_TRUE(stats.ok());
+  EXPECT_EQ(stats->remerged, 1);
+  auto reference = MergedMap::create(config_).value();
+  for (const auto& e : entries) ASSERT_TRUE(reference->add(e).ok());
+  EXPECT_TRUE(merged->sameVoxels(*reference));
 }
 
 TEST_F(MergedMapTest, TraverseVisitsContiguousVoxelsAndAgreesWithPointQueries) {
