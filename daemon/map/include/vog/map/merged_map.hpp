@@ -13,7 +13,7 @@
 // value. The local coordinates are computed exactly as VogMap::query computes them, so the merged value
 // at every global voxel centre equals the sequential query there (Alg. 2) up to the fixed-point
 // rounding of each term (< 1e-9). A moved submap is evaluated at both poses in one pass, and only the
-// centres that enter or leave a leaf change (a few millimetres' move changes about a fifth of them).
+// centres that enter or leave a leaf change (a move of a few millimetres: about one in six).
 //
 // Storage: 8x8x8 voxel blocks in 16 hash tables (shards; a block's shard is fixed by the low bits of its
 // x and y block coordinates). Blocks are shared copy-on-write with snapshots.
@@ -108,9 +108,10 @@ class MergedMap {
   Status remove(SubmapId id);
   // Brings the map in line with `entries` (a VogMap's current list): merges new submaps, removes
   // vanished ones, moves only submaps whose pose moved beyond the tolerance (changing only the voxels
-  // that differ). When that costs more than merging all of `entries` from scratch (a move costs about
-  // 1.5 merges: a loop closure that moves nearly every submap), it does that instead (the same sums and
-  // counts, every block gets a new version). Everything is checked before anything changes.
+  // that differ). When that costs more than merging all of `entries` from scratch (a move costs 0.8 to
+  // 1.7 merges, by how far it shifts the submap's voxels: a loop closure that moves nearly every
+  // submap), it does that instead (the same sums and counts, every block gets a new version).
+  // Everything is checked before anything changes.
   // `cancelled`, when given, is asked by the calling thread between submaps (with threads, between
   // groups of 16): once it says true, sync stops with an error and leaves the map part-way (consistent,
   // for a writer that is shutting down and discards it); a merge from scratch leaves it as it was.
@@ -236,6 +237,8 @@ class MergedMap {
   // Ops per parallel call: enough to keep every task busy, few enough to bound the lists' memory (a
   // submap contributes about 1 MB) and the wait for a cancellation.
   static constexpr std::size_t kParallelGroup = 16;
+  // The cost of moving a submap (same grid) from one pose to the other, in merges of one submap.
+  double moveCost(const SubmapEntry& from, const SubmapEntry& to) const;
   // sync() when it merges everything from scratch; `entries` checked.
   Result<SyncStats> rebuild(const std::vector<SubmapEntry>& entries, SyncStats stats,
                             const std::function<bool()>& cancelled, const MergeThreads& threads);
