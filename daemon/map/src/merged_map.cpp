@@ -105,8 +105,7 @@ Status MergedMap::remove(SubmapId id) {
 double MergedMap::moveCost(const SubmapEntry& from, const SubmapEntry& to) const {
   // How far the submap's farthest known corner moves, in voxels.
   const Eigen::AlignedBox3d box = to.grid->knownBox();
-  const double radius =
-      box.isEmpty() ? 0.0 : box.min().cwiseAbs().cwiseMax(box.max().cwiseAbs()).norm();
+  const double radius = box.isEmpty() ? 0.0 : box.min().cwiseAbs().cwiseMax(box.max().cwiseAbs()).norm();
   const double shift = (geometry::translationDistance(from.T_world_submap, to.T_world_submap) +
                         geometry::rotationAngle(from.T_world_submap, to.T_world_submap) * radius) *
                        inv_resolution_;
@@ -261,6 +260,26 @@ int ceilToInt(double x) {
   return truncated + (x > static_cast<double>(truncated) ? 1 : 0);
 }
 
+// A voxel's change from one submap's value: value * 2^16 + 1 in 2^-28 log-odds units, times the sign (one
+// addition updates sum and count together; see merged_map.hpp). Leaves share few values, so the last
+// one's is remembered.
+class FixedDelta {
+ public:
+  std::int64_t operator()(int sign, float value) {
+    if (value != value_) {
+      value_ = value;
+      magnitude_ = std::llround(static_cast<double>(value) * MergedMap::kFixedScale) *
+                       (std::int64_t{1} << MergedMap::kCountBits) +
+                   1;
+    }
+    return sign * magnitude_;
+  }
+
+ private:
+  float value_ = std::numeric_limits<float>::quiet_NaN();
+  std::int64_t magnitude_ = 0;
+};
+
 // A submap at one pose over the global grid: which global voxel centres may lie in a leaf's rotated
 // cube (a box of candidates, a superset), and whether one does (exactly as VogMap::query computes the
 // local key of a point).
@@ -321,21 +340,11 @@ void MergedMap::evaluate(const MergeOp& op, Sink&& sink) const {
   // Over every leaf: the candidates, each tested exactly. `moving` (a compile-time flag: the test of the
   // old pose stays out of the inner loop of a plain merge) adds the old pose's candidates and test.
   const auto run = [&](auto moving, const Placement* from) {
-    // One addition updates sum and count together: value * 2^16 + 1 (times the sign). Leaves share few
-    // values, so it is recomputed only when the value changes.
-    float last_value = std::numeric_limits<float>::quiet_NaN();
-    std::int64_t delta = 0;
     op.entry->grid->forEachLeaf([&](const LocalGrid::Leaf& leaf) {
       VoxelKey gmin;
       VoxelKey gmax;
       to.candidates(leaf, gmin, gmax);
       if constexpr (decltype(moving)::value) from->extendCandidates(leaf, gmin, gmax);
-      if (leaf.log_odds != last_value) {
-        last_value = leaf.log_odds;
-        delta = op.sign * (std::llround(static_cast<double>(leaf.log_odds) * kFixedScale) *
-                               (std::int64_t{1} << kCountBits) +
-                           1);
-      }
       VoxelKey g;
       for (g.z() = gmin.z(); g.z() <= gmax.z(); ++g.z()) {
         for (g.y() = gmin.y(); g.y() <= gmax.y(); ++g.y()) {
@@ -345,9 +354,9 @@ void MergedMap::evaluate(const MergeOp& op, Sink&& sink) const {
             if constexpr (decltype(moving)::value) {
               // A move changes only the centres that enter or leave the leaf.
               if (in == from->holds(leaf, centre)) continue;
-              sink(packBlock(blockOf(g)), static_cast<std::size_t>(indexIn(g)), in ? delta : -delta);
+              sink(packBlock(blockOf(g)), indexIn(g), in ? op.sign : -op.sign, leaf.log_odds);
             } else {
-              if (in) sink(packBlock(blockOf(g)), static_cast<std::size_t>(indexIn(g)), delta);
+              if (in) sink(packBlock(blockOf(g)), indexIn(g), op.sign, leaf.log_odds);
             }
           }
         }
@@ -377,9 +386,9 @@ void MergedMap::applyParallel(const std::vector<MergeOp>& ops, std::size_t begin
     if (static_cast<std::size_t>(task) >= tasks) return;  // more threads than shards: idle
     for (std::size_t k = static_cast<std::size_t>(task); k < n; k += tasks) {
       std::vector<Contribution>* lists = &scratch[k * tasks];
-      evaluate(ops[begin + k], [&](std::uint64_t packed, std::size_t index, std::int64_t delta) {
+      evaluate(ops[begin + k], [&](std::uint64_t packed, int index, int sign, float value) {
         lists[owner[static_cast<std::size_t>(shardOf(packed))]].push_back(
-            {packed, delta, static_cast<std::uint32_t>(index)});
+            {packed, value, static_cast<std::int16_t>(sign), static_cast<std::uint16_t>(index)});
       });
     }
   });
@@ -387,10 +396,11 @@ void MergedMap::applyParallel(const std::vector<MergeOp>& ops, std::size_t begin
   threads.run([&](int task) {
     if (static_cast<std::size_t>(task) >= tasks) return;
     WriteCursor cursor;
+    FixedDelta delta;
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint64_t version = ops[begin + k].version;
       for (const Contribution& c : scratch[k * tasks + static_cast<std::size_t>(task)]) {
-        addVoxel(cursor, c.packed, c.index, c.delta, version);
+        addVoxel(cursor, c.packed, c.index, delta(c.sign, c.log_odds), version);
       }
       finishOp(cursor, version);
     }
@@ -399,8 +409,9 @@ void MergedMap::applyParallel(const std::vector<MergeOp>& ops, std::size_t begin
 
 void MergedMap::applySerial(const MergeOp& op) {
   WriteCursor cursor;
-  evaluate(op, [&](std::uint64_t packed, std::size_t index, std::int64_t delta) {
-    addVoxel(cursor, packed, index, delta, op.version);
+  FixedDelta delta;
+  evaluate(op, [&](std::uint64_t packed, int index, int sign, float value) {
+    addVoxel(cursor, packed, static_cast<std::size_t>(index), delta(sign, value), op.version);
   });
   finishOp(cursor, op.version);
 }

@@ -211,8 +211,9 @@ class MergedMap {
   // One voxel's change from one submap: what a parallel merge's first phase hands to the second.
   struct Contribution {
     std::uint64_t packed;  // block
-    std::int64_t delta;    // (fixed-point value << 16) + 1, times the sign
-    std::uint32_t index;   // voxel in the block
+    float log_odds;        // the submap's value there
+    std::int16_t sign;     // +1 in, -1 out
+    std::uint16_t index;   // voxel in the block
   };
   // The writer's place while it applies one op: the block last written and the blocks it emptied.
   struct WriteCursor {
@@ -220,7 +221,9 @@ class MergedMap {
     std::uint64_t packed = ~std::uint64_t{0};
     std::vector<std::uint64_t> emptied;
   };
-  // Calls sink(packed block, voxel index, delta) for every global voxel the op's submap knows (reads only).
+  // Calls sink(packed block, voxel index, sign, log-odds) for every global voxel the op changes: each
+  // voxel the submap knows (sign: the op's), or for a move each voxel whose leaf changed (+1 into the
+  // new leaf, -1 out of the old). Reads only.
   template <class Sink>
   void evaluate(const MergeOp& op, Sink&& sink) const;
   // Adds one contribution of the op with `version` (copy-on-write, block creation, emptied blocks).
