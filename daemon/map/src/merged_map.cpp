@@ -249,17 +249,6 @@ Result<SyncStats> MergedMap::rebuild(const std::vector<SubmapEntry>& entries, Sy
 
 namespace {
 
-// floor and ceil of x for finite x within int range, as integers (the truncate-and-fix of coordToIndex:
-// std::floor and std::ceil compile to long bit-twiddling sequences on baseline x86-64).
-int floorToInt(double x) {
-  const int truncated = static_cast<int>(x);
-  return truncated - (x < static_cast<double>(truncated) ? 1 : 0);
-}
-int ceilToInt(double x) {
-  const int truncated = static_cast<int>(x);
-  return truncated + (x > static_cast<double>(truncated) ? 1 : 0);
-}
-
 // A voxel's change from one submap's value: value * 2^16 + 1 in 2^-28 log-odds units, times the sign (one
 // addition updates sum and count together; see merged_map.hpp). Leaves share few values, so the last
 // one's is remembered.
@@ -290,8 +279,9 @@ class Placement {
         inv_resolution_(inv_resolution),
         R_(entry.T_world_submap.linear()),
         t_voxels_(entry.T_world_submap.translation() * inv_resolution) {
+    const Eigen::Matrix3d R_abs = R_.cwiseAbs();
     for (std::size_t s = 0; s < half_extent_.size(); ++s) {
-      half_extent_[s] = R_.cwiseAbs() * Eigen::Vector3d::Constant(0.5 * static_cast<double>(1 << s));
+      half_extent_[s] = R_abs * Eigen::Vector3d::Constant(0.5 * static_cast<double>(1 << s));
     }
   }
 
@@ -305,8 +295,9 @@ class Placement {
     const Eigen::Vector3d c = R_ * (leaf.min.cast<double>() + Eigen::Vector3d::Constant(0.5 * side)) + t_voxels_;
     for (int i = 0; i < 3; ++i) {
       // Global centre g + 0.5 within [c - e, c + e].
-      gmin[i] = ceilToInt(c[i] - e[i] - 0.5 - kHair);
-      gmax[i] = floorToInt(c[i] + e[i] - 0.5 + kHair);
+      // coordToIndex(x, 1.0) is floor(x) as an integer, and ceil(x) = -floor(-x).
+      gmin[i] = -coordToIndex(-(c[i] - e[i] - 0.5 - kHair), 1.0);
+      gmax[i] = coordToIndex(c[i] + e[i] - 0.5 + kHair, 1.0);
     }
   }
   // Extends [gmin, gmax] by the candidates at this pose.
