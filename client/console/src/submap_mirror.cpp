@@ -46,6 +46,7 @@ Result<map::SyncStats> SubmapMirror::sync() {
   map::MergeConfig exact;
   exact.remerge_translation_m = 0.0;
   exact.remerge_rotation_rad = 0.0;
+  exact.max_moves_per_sync = 0;  // a mirror moves every submap at once
   exact.threads = 1;
   auto stats = merged_->sync(entries, exact);
   if (!stats) return stats.error();

@@ -452,6 +452,7 @@ Result<VogdConfig> parseVogdConfig(const std::string& text, const std::string& s
   ConfigMap merge = root.map("merge");
   merge.number("remerge_translation_m", c.merge.remerge_translation_m, 0.0, 10.0);
   merge.degrees("remerge_rotation_deg", c.merge.remerge_rotation_rad, 0.0, 180.0);
+  merge.integer("max_moves_per_sync", c.merge.max_moves_per_sync, 0, 1'000'000);
   merge.integer("threads", c.merge.threads, 0, 64);
   merge.finish();
   readPlanner(root.map("planner"), c.planner, c.revisit);

@@ -108,15 +108,28 @@ std::uint64_t MergeWorker::heartbeat() const {
 
 void MergeWorker::run() {
   std::unique_lock lock(mutex_);
+  // The set of the last sync when it deferred moves (MergeConfig::max_moves_per_sync), synced again
+  // until nothing is deferred or a newer set replaces it (merge thread only; `lock` is not needed).
+  std::optional<std::vector<SubmapEntry>> unfinished;
+  std::uint64_t unfinished_sequence = 0;
   while (true) {
     // A periodic wake-up keeps the heartbeat moving while there is nothing to merge.
-    wake_.wait_for(lock, std::chrono::milliseconds(200), [&] { return stopping_ || (pending_ && !error_); });
+    wake_.wait_for(lock, std::chrono::milliseconds(200),
+                   [&] { return stopping_ || ((pending_ || unfinished) && !error_); });
     ++heartbeat_;
     if (stopping_) return;
-    if (!pending_ || error_) continue;
-    std::vector<SubmapEntry> entries = std::move(*pending_);
-    pending_.reset();
-    const std::uint64_t sequence = submitted_;
+    if ((!pending_ && !unfinished) || error_) continue;
+    std::vector<SubmapEntry> entries;
+    std::uint64_t sequence = 0;
+    if (pending_) {
+      entries = std::move(*pending_);
+      pending_.reset();
+      sequence = submitted_;
+    } else {
+      entries = std::move(*unfinished);
+      sequence = unfinished_sequence;
+    }
+    unfinished.reset();
     lock.unlock();
 
     const auto t0 = std::chrono::steady_clock::now();
@@ -132,11 +145,17 @@ void MergeWorker::run() {
     if (stopping_) return;  // cancelled, or finished after stop(): nothing more is published
     if (!stats) {
       error_ = Error{"merge of submap set " + std::to_string(sequence) + ": " + stats.error().message};
+      merged_sequence_ = sequence;
     } else {
       snapshot_ = std::move(snapshot);
       records_.push_back({sequence, entries.size(), ms, *stats});
+      if (stats->deferred > 0) {
+        unfinished = std::move(entries);
+        unfinished_sequence = sequence;
+      } else {
+        merged_sequence_ = sequence;
+      }
     }
-    merged_sequence_ = sequence;
     idle_.notify_all();
   }
 }

@@ -9,7 +9,9 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <type_traits>
+#include <utility>
 
 namespace vog::map {
 
@@ -18,6 +20,8 @@ Status MergeConfig::validate() const {
     return Error{"merge.remerge_translation_m must be finite and >= 0, got " + std::to_string(remerge_translation_m)};
   if (!(remerge_rotation_rad >= 0.0) || !std::isfinite(remerge_rotation_rad))
     return Error{"merge.remerge_rotation_rad must be finite and >= 0, got " + std::to_string(remerge_rotation_rad)};
+  if (max_moves_per_sync < 0)
+    return Error{"merge.max_moves_per_sync must be >= 0, got " + std::to_string(max_moves_per_sync)};
   if (threads < 0 || threads > 64) return Error{"merge.threads must be in [0, 64], got " + std::to_string(threads)};
   return {};
 }
@@ -146,6 +150,29 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     ++stats.removed;
   }
   const bool exact = config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0;
+  const auto movedBeyondTolerance = [&](const SubmapEntry& old, const SubmapEntry& e) {
+    // Moves accumulate against the pose the submap was merged at, so many small ones still trigger.
+    if (old.T_world_submap.matrix() == e.T_world_submap.matrix()) return false;
+    return exact ||
+           geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
+           geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad;
+  };
+  // Moves past MergeConfig::max_moves_per_sync: the nearest to the newest submap's base are made (ties by
+  // id), the others deferred.
+  std::vector<std::pair<double, SubmapId>> moves;  // (squared distance to the newest base, id)
+  for (const auto& e : entries) {
+    const auto it = merged_.find(e.id);
+    if (it != merged_.end() && it->second.grid == e.grid && movedBeyondTolerance(it->second, e))
+      moves.emplace_back(0.0, e.id);
+  }
+  std::set<SubmapId> deferred;
+  const auto limit = static_cast<std::size_t>(config.max_moves_per_sync);
+  if (limit > 0 && moves.size() > limit) {
+    const Eigen::Vector3d newest = wanted.rbegin()->second->T_world_submap.translation();
+    for (auto& [d2, id] : moves) d2 = (wanted.at(id)->T_world_submap.translation() - newest).squaredNorm();
+    std::nth_element(moves.begin(), moves.begin() + static_cast<std::ptrdiff_t>(limit), moves.end());
+    for (std::size_t k = limit; k < moves.size(); ++k) deferred.insert(moves[k].second);
+  }
   for (const auto& e : entries) {
     const auto it = merged_.find(e.id);
     if (it == merged_.end()) {
@@ -154,13 +181,7 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
       continue;
     }
     const SubmapEntry& old = it->second;
-    // Moves accumulate against the pose the submap was merged at, so many small ones still trigger.
-    const bool same_pose = old.T_world_submap.matrix() == e.T_world_submap.matrix();
-    const bool beyond_tolerance =
-        geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
-        geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad;
-    const bool moved = old.grid != e.grid || (!same_pose && (exact || beyond_tolerance));
-    if (!moved) {
+    if (old.grid == e.grid && (!movedBeyondTolerance(old, e) || deferred.count(e.id) != 0)) {
       ++unchanged;
       continue;
     }
@@ -174,11 +195,14 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     }
     ++stats.remerged;
   }
+  stats.deferred = static_cast<int>(deferred.size());
   // In merges of one submap: from scratch, one per entry (the unchanged, the moved and the new ones);
   // the incremental way, one per vanished or new submap and the moves' cost.
   const auto kept = static_cast<double>(unchanged + static_cast<std::size_t>(stats.remerged));
-  if (kept < static_cast<double>(stats.removed) + move_cost && !merged_.empty())
+  if (kept < static_cast<double>(stats.removed) + move_cost && !merged_.empty()) {
+    stats.remerged += std::exchange(stats.deferred, 0);  // from scratch every submap is merged at its pose
     return rebuild(entries, stats, cancelled, threads);
+  }
 
   const auto record = [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {

@@ -106,6 +106,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.graph.attitude_from_absolute, b.mapping.graph.attitude_from_absolute);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
+  EXPECT_EQ(a.merge.max_moves_per_sync, b.merge.max_moves_per_sync);
   EXPECT_EQ(a.merge.threads, b.merge.threads);
   const auto& pa = a.planner;
   const auto& pb = b.planner;

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace vog::map {
@@ -54,6 +55,30 @@ TEST(MergeWorker, PublishesTheMergeOfEachSubmittedSet) {
   ASSERT_EQ(records.size(), built.size() + 1);
   EXPECT_EQ(records.back().stats.remerged, static_cast<int>(built.size()));
   EXPECT_TRUE(worker->takeRecords().empty());
+}
+
+// A set whose moves exceed MergeConfig::max_moves_per_sync is synced until none is deferred: each sync
+// publishes, waitIdle() waits for the last.
+TEST(MergeWorker, DeferredMovesAreMergedBeforeTheWorkerIsIdle) {
+  const GridConfig config;
+  const auto built = test_fixtures::buildSubmaps(config, 5, 10, 3, 4.0);
+  MergeConfig limited;
+  limited.max_moves_per_sync = 2;
+  auto worker = MergeWorker::create(config, limited).value();
+  worker->submit(entriesOf(built, built.size()));
+  ASSERT_TRUE(worker->waitIdle().ok());
+  ASSERT_EQ(worker->takeRecords().size(), 1u);
+  const geometry::Pose3 T_shift = geometry::poseFromXyzRpy(0.3, -0.2, 0.0, 0.0, 0.0, 0.02);
+  const std::uint64_t seq = worker->submit(entriesOf(built, built.size(), T_shift));
+  ASSERT_TRUE(worker->waitIdle().ok());
+  EXPECT_EQ(worker->mergedSequence(), seq);
+  EXPECT_TRUE(worker->snapshot()->sameVoxels(*mergedFromScratch(config, entriesOf(built, built.size(), T_shift))));
+  const auto records = worker->takeRecords();
+  ASSERT_EQ(records.size(), 3u);
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    EXPECT_EQ(records[k].sequence, seq);
+    EXPECT_EQ(records[k].stats.deferred, std::max(0, 3 - 2 * static_cast<int>(k)));
+  }
 }
 
 TEST(MergeWorker, ABurstOfSubmissionsEndsAtTheNewestSet) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <limits>
 #include <map>
 #include <tuple>
@@ -210,6 +211,50 @@ TEST_F(MergedMapTest, MillimetreMovesEqualFromScratchAndBringACopyUpToDate) {
     seen = merged->version();
     expectMirrors(mirror, *merged, config_);
   }
+  EXPECT_TRUE(merged->sameVoxels(*mergeFromScratch()));
+  expectMergedEqualsSequential(*merged);
+}
+
+// With MergeConfig::max_moves_per_sync, a sync moves the submaps nearest to the newest one and leaves the
+// others where they were merged; the syncs that follow move the rest, and the map ends equal to a merge
+// from scratch.
+TEST_F(MergedMapTest, MovesBeyondTheLimitAreDeferredNearestFirstAndCaughtUpExactly) {
+  MergeConfig limited{0.0, 0.0};
+  limited.max_moves_per_sync = 2;
+  auto merged = mergeFromScratch();
+  const std::vector<SubmapEntry> before = vog_->entries();
+  std::mt19937_64 rng(6);
+  auto poses = vog_->poses();
+  for (auto& pose : poses) pose = test_fixtures::perturb(pose, 0.006, 0.0008, rng);
+  ASSERT_TRUE(vog_->deform(poses).ok());
+  const std::vector<SubmapEntry> after = vog_->entries();
+  // The expected order: by distance of the new base to the newest submap's.
+  std::vector<std::pair<double, std::size_t>> order;
+  for (std::size_t k = 0; k < after.size(); ++k)
+    order.emplace_back((after[k].T_world_submap.translation() - after.back().T_world_submap.translation()).norm(), k);
+  std::sort(order.begin(), order.end());
+  std::vector<SubmapEntry> expected = before;
+  Mirror mirror;
+  catchUp(mirror, *merged, 0);
+  std::uint64_t seen = merged->version();
+  for (std::size_t step = 0; step < 3; ++step) {
+    SCOPED_TRACE(step);
+    const auto stats = merged->sync(after, limited);
+    ASSERT_TRUE(stats.ok());
+    EXPECT_EQ(stats->remerged, 2);
+    EXPECT_EQ(stats->deferred, 4 - 2 * static_cast<int>(step));
+    for (std::size_t j = 2 * step; j < 2 * step + 2; ++j) expected[order[j].second] = after[order[j].second];
+    auto reference = MergedMap::create(config_).value();
+    for (const auto& e : expected) ASSERT_TRUE(reference->add(e).ok());
+    EXPECT_TRUE(merged->sameVoxels(*reference));
+    catchUp(mirror, *merged, seen);
+    seen = merged->version();
+    expectMirrors(mirror, *merged, config_);
+  }
+  const auto done = merged->sync(after, limited);
+  ASSERT_TRUE(done.ok());
+  EXPECT_EQ(done->remerged, 0);
+  EXPECT_EQ(done->deferred, 0);
   EXPECT_TRUE(merged->sameVoxels(*mergeFromScratch()));
   expectMergedEqualsSequential(*merged);
 }

@@ -2,7 +2,9 @@
 // MergeWorker: the merge thread (thesis 4.5.5, DESIGN "Threads in vogd" 3). The mapping side submits
 // the VogMap's current entries after every change; the worker brings its MergedMap in line with the
 // newest submitted set (MergedMap::sync: new submaps merged in, moved ones re-merged) and publishes an
-// immutable snapshot. Readers (planner, API) take snapshot() at any time and never wait for a merge.
+// immutable snapshot. A sync that deferred moves (MergeConfig::max_moves_per_sync) is followed by
+// another on the same set, unless a newer one has arrived: each publishes its snapshot, the first with
+// the submaps around the vehicle moved. Readers (planner, API) take snapshot() at any time and never wait for a merge.
 //
 // Lifecycle: create() starts the thread; submit() any number of times from any thread; the destructor
 // (or stop()) finishes the merge in progress, drops what is still queued and joins. Submissions
@@ -39,7 +41,7 @@ int mergeThreadCount(const MergeConfig& config);
 // of microseconds). A thread that cannot be started has its task run on the calling thread.
 MergeThreads spawnMergeThreads(int tasks);
 
-// One completed merge.
+// One completed merge (a set whose moves were deferred has one record per sync).
 struct MergeRecord {
   std::uint64_t sequence = 0;  // of the submitted set (1, 2, ...)
   std::size_t n_submaps = 0;
@@ -58,10 +60,10 @@ class MergeWorker {
   std::uint64_t submit(std::vector<SubmapEntry> entries);
   // The newest published snapshot; null before the first merge completes.
   std::shared_ptr<const MergedMap> snapshot() const;
-  // Sequence number of the set the current snapshot reflects (0: none yet).
+  // Sequence number of the newest set the current snapshot reflects wholly (0: none yet).
   std::uint64_t mergedSequence() const;
-  // Blocks until every set submitted so far is merged (or the worker failed/stopped): the error of a
-  // failed merge, else ok.
+  // Blocks until every set submitted so far is merged with nothing deferred (or the worker
+  // failed/stopped): the error of a failed merge, else ok.
   Status waitIdle();
   // Completed merges since the last call (for timing figures).
   std::vector<MergeRecord> takeRecords();

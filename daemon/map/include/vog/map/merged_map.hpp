@@ -57,6 +57,12 @@ struct MergeConfig {
   // any change (exactness); the defaults keep every voxel of a 5.6 m submap within 1/20 resolution.
   double remerge_translation_m = 0.005;
   double remerge_rotation_rad = 0.0008;
+  // At most this many moved submaps are re-merged by one sync(), those whose new base poses are nearest
+  // to the newest submap's (where the vehicle is) first; the others keep the pose they were merged at
+  // until a later sync (SyncStats::deferred; MergeWorker syncs again until none is left). So the map
+  // around the vehicle follows a loop closure that moves most of a long mission's submaps in a bounded
+  // time. 0: no limit.
+  int max_moves_per_sync = 200;
   // Threads of one merge (MergeWorker): 0 = std::thread::hardware_concurrency(), at most 4; 1 = serial.
   // The merged map is the same for any number.
   int threads = 0;
@@ -75,6 +81,7 @@ struct SyncStats {
   int added = 0;
   int removed = 0;
   int remerged = 0;
+  int deferred = 0;  // moved beyond the tolerance, left at the pose they were merged at (max_moves_per_sync)
 };
 
 class MergedMap {
@@ -108,13 +115,13 @@ class MergedMap {
   Status remove(SubmapId id);
   // Brings the map in line with `entries` (a VogMap's current list): merges new submaps, removes
   // vanished ones, moves only submaps whose pose moved beyond the tolerance (changing only the voxels
-  // that differ). When that costs more than merging all of `entries` from scratch (a move costs 0.8 to
-  // 1.7 merges, by how far it shifts the submap's voxels: a loop closure that moves nearly every
-  // submap), it does that instead (the same sums and counts, every block gets a new version).
-  // Everything is checked before anything changes.
-  // `cancelled`, when given, is asked by the calling thread between submaps (with threads, between
-  // groups of 16): once it says true, sync stops with an error and leaves the map part-way (consistent,
-  // for a writer that is shutting down and discards it); a merge from scratch leaves it as it was.
+  // that differ; at most MergeConfig::max_moves_per_sync, the nearest to the newest submap). When that costs more than
+  // merging all of `entries` from scratch (a move costs 0.8 to 1.7 merges, by how far it shifts the submap's voxels: a
+  // loop closure that moves nearly every submap), it does that instead (the same sums and counts, every block gets a
+  // new version). Everything is checked before anything changes. `cancelled`, when given, is asked by the calling
+  // thread between submaps (with threads, between groups of 16): once it says true, sync stops with an error and leaves
+  // the map part-way (consistent, for a writer that is shutting down and discards it); a merge from scratch leaves it
+  // as it was.
   Result<SyncStats> sync(const std::vector<SubmapEntry>& entries, const MergeConfig& config,
                          const std::function<bool()>& cancelled = {}, const MergeThreads& threads = {});
   // An immutable copy sharing every block (O(number of blocks) pointer copies). Blocks are shared by
