@@ -439,7 +439,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
     bool after_closure = false;
   };
   std::map<std::uint64_t, Submission> submitted;
-  std::uint64_t last_merged_sequence = 0;  // of the newest MergeRecord taken
+  std::uint64_t last_merged_sequence = 0;  // of the newest MergeRecord taken (sequences start at 1)
   // Baseline: one global grid in the world frame at raw odometry.
   auto global_r = map::LocalGrid::create(grid_config);
   if (!global_r) return fail(global_r.error().message);
@@ -524,7 +524,7 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       const auto it = submitted.find(r.sequence);
       const Submission at = it == submitted.end() ? Submission{} : it->second;
       submitted.erase(submitted.begin(), it);  // the sets before it are done (or were replaced)
-      const bool first = merges.empty() || r.sequence != last_merged_sequence;
+      const bool first = r.sequence != last_merged_sequence;
       merges.push_back(
           {at.sim_s, r.n_submaps, r.merge_ms, r.stats.remerged, r.stats.deferred, first, at.after_closure});
       last_merged_sequence = r.sequence;

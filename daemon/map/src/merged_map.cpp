@@ -9,7 +9,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <set>
 #include <type_traits>
 #include <utility>
 
@@ -150,30 +149,33 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     ++stats.removed;
   }
   const bool exact = config.remerge_translation_m == 0.0 && config.remerge_rotation_rad == 0.0;
-  const auto movedBeyondTolerance = [&](const SubmapEntry& old, const SubmapEntry& e) {
-    // Moves accumulate against the pose the submap was merged at, so many small ones still trigger.
-    if (old.T_world_submap.matrix() == e.T_world_submap.matrix()) return false;
-    return exact ||
-           geometry::translationDistance(old.T_world_submap, e.T_world_submap) > config.remerge_translation_m ||
-           geometry::rotationAngle(old.T_world_submap, e.T_world_submap) > config.remerge_rotation_rad;
-  };
-  // Moves past MergeConfig::max_moves_per_sync: the nearest to the newest submap's base are made (ties by
-  // id), the others deferred.
-  std::vector<std::pair<double, SubmapId>> moves;  // (squared distance to the newest base, id)
-  for (const auto& e : entries) {
-    const auto it = merged_.find(e.id);
-    if (it != merged_.end() && it->second.grid == e.grid && movedBeyondTolerance(it->second, e))
-      moves.emplace_back(0.0, e.id);
+  // The submaps whose pose moved beyond the tolerance (same grid). Moves accumulate against the pose
+  // the submap was merged at, so many small ones still trigger. Past MergeConfig::max_moves_per_sync
+  // only the nearest to the newest submap's base move now (ties by index), the others are deferred.
+  std::vector<char> move(entries.size(), 0);
+  std::vector<std::pair<double, std::size_t>> moves;  // (squared distance to the newest base, entry index)
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const auto it = merged_.find(entries[k].id);
+    if (it == merged_.end() || it->second.grid != entries[k].grid) continue;
+    const geometry::Pose3& from = it->second.T_world_submap;
+    const geometry::Pose3& to = entries[k].T_world_submap;
+    if (from.matrix() == to.matrix()) continue;
+    if (exact || geometry::translationDistance(from, to) > config.remerge_translation_m ||
+        geometry::rotationAngle(from, to) > config.remerge_rotation_rad) {
+      move[k] = 1;
+      moves.emplace_back(0.0, k);
+    }
   }
-  std::set<SubmapId> deferred;
   const auto limit = static_cast<std::size_t>(config.max_moves_per_sync);
   if (limit > 0 && moves.size() > limit) {
     const Eigen::Vector3d newest = wanted.rbegin()->second->T_world_submap.translation();
-    for (auto& [d2, id] : moves) d2 = (wanted.at(id)->T_world_submap.translation() - newest).squaredNorm();
+    for (auto& [d2, k] : moves) d2 = (entries[k].T_world_submap.translation() - newest).squaredNorm();
     std::nth_element(moves.begin(), moves.begin() + static_cast<std::ptrdiff_t>(limit), moves.end());
-    for (std::size_t k = limit; k < moves.size(); ++k) deferred.insert(moves[k].second);
+    for (std::size_t j = limit; j < moves.size(); ++j) move[moves[j].second] = 0;
+    stats.deferred = static_cast<int>(moves.size() - limit);
   }
-  for (const auto& e : entries) {
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const SubmapEntry& e = entries[k];
     const auto it = merged_.find(e.id);
     if (it == merged_.end()) {
       ops.push_back({&e, nullptr, +1, ++version});
@@ -181,7 +183,7 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
       continue;
     }
     const SubmapEntry& old = it->second;
-    if (old.grid == e.grid && (!movedBeyondTolerance(old, e) || deferred.count(e.id) != 0)) {
+    if (old.grid == e.grid && move[k] == 0) {
       ++unchanged;
       continue;
     }
@@ -195,7 +197,6 @@ Result<SyncStats> MergedMap::sync(const std::vector<SubmapEntry>& entries, const
     }
     ++stats.remerged;
   }
-  stats.deferred = static_cast<int>(deferred.size());
   // In merges of one submap: from scratch, one per entry (the unchanged, the moved and the new ones);
   // the incremental way, one per vanished or new submap and the moves' cost.
   const auto kept = static_cast<double>(unchanged + static_cast<std::size_t>(stats.remerged));

@@ -4,7 +4,8 @@
 // newest submitted set (MergedMap::sync: new submaps merged in, moved ones re-merged) and publishes an
 // immutable snapshot. A sync that deferred moves (MergeConfig::max_moves_per_sync) is followed by
 // another on the same set, unless a newer one has arrived: each publishes its snapshot, the first with
-// the submaps around the vehicle moved. Readers (planner, API) take snapshot() at any time and never wait for a merge.
+// the submaps around the vehicle moved. Readers (planner, API) take snapshot() at any time and never
+// wait for a merge.
 //
 // Lifecycle: create() starts the thread; submit() any number of times from any thread; the destructor
 // (or stop()) finishes the merge in progress, drops what is still queued and joins. Submissions
