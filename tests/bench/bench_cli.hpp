@@ -35,6 +35,13 @@ inline void addSparseBackendOption(CLI::App& app, slam::SparseBackend& field, co
           {"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}}));
 }
 
+// --graph-linear-solver cholesky|cg: each solver step (PoseGraphConfig::linear_solver).
+inline void addLinearSolverOption(CLI::App& app, slam::LinearSolver& field, const std::string& description) {
+  app.add_option("--graph-linear-solver", field, description)
+      ->transform(CLI::CheckedTransformer(std::map<std::string, slam::LinearSolver>{
+          {"cholesky", slam::LinearSolver::kSparseCholesky}, {"cg", slam::LinearSolver::kChainPreconditionedCg}}));
+}
+
 // The loop closer's acceptance and checks (--lc-*), shared by the benches that run a MappingPipeline.
 inline void addLoopClosureOptions(CLI::App& app, slam::MappingPipelineConfig& mc) {
   slam::LoopCloserConfig& lc = mc.loop_closer;

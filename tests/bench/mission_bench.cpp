@@ -323,6 +323,9 @@ VOG_BENCH_COMMAND(mission, "Closed-loop exploration in lockstep: coverage, RMSE,
       ->check(CLI::Range(1, 100'000));
   vog::bench::addSparseBackendOption(app, mc.graph.sparse_backend,
                                      "mapping: the pose graph's sparse Cholesky, eigen or suitesparse");
+  vog::bench::addLinearSolverOption(
+      app, mc.graph.linear_solver,
+      "mapping: each pose-graph solver step, cholesky (exact) or cg (odometry-preconditioned)");
   app.add_option("--graph-attitude-from-absolute", mc.graph.attitude_from_absolute,
                  "mapping: hold each submap's depth and attitude at its absolute factor; solve x, y, yaw (1/0)");
   app.add_flag("--optimize-closed-loop-only", mc.optimize_closed_loop_only,

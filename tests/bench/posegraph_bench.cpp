@@ -149,6 +149,7 @@ VOG_BENCH_COMMAND(posegraph, "g2o pose-graph optimisation (chi2, iterations, sol
   int chain = 0;
   vog::slam::PoseGraphConfig config;
   vog::bench::addSparseBackendOption(app, config.sparse_backend, "sparse Cholesky: eigen or suitesparse");
+  vog::bench::addLinearSolverOption(app, config.linear_solver, "each solver step: cholesky (exact) or cg");
   app.add_option("--g2o", g2o_path, "g2o file (VERTEX_SE2/EDGE_SE2 or VERTEX_SE3:QUAT/EDGE_SE3:QUAT)");
   app.add_option("--chain", chain, "instead of a file: the mapping pipeline's graph after this many submaps")
       ->check(CLI::Range(42, 100000));

@@ -129,6 +129,9 @@ void readMapping(ConfigMap m, slam::MappingPipelineConfig& c) {
   m.integer("full_optimization_every", c.full_optimization_every, 1, 1'000'000);
   m.enumeration("sparse_backend", c.graph.sparse_backend,
                 {{"eigen", slam::SparseBackend::kEigen}, {"suitesparse", slam::SparseBackend::kSuiteSparse}});
+  m.enumeration(
+      "linear_solver", c.graph.linear_solver,
+      {{"cholesky", slam::LinearSolver::kSparseCholesky}, {"cg", slam::LinearSolver::kChainPreconditionedCg}});
   m.boolean("attitude_from_absolute", c.graph.attitude_from_absolute);
   m.finish();
 }

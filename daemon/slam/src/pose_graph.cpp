@@ -17,6 +17,7 @@
 #include <iterator>
 #include <memory>
 #include <sstream>
+#include <unordered_set>
 
 namespace vog::slam {
 namespace {
@@ -697,6 +698,10 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   };
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
+  // LinearSolver::kChainPreconditionedCg's preconditioner: the odometry, the SE2 / SE3 factors between
+  // consecutive ids (a g2o file's odometry edges) and the absolute factors.
+  std::unordered_set<ceres::ResidualBlockId> chain;
+  bool has_chain = false;  // some relative factor of the chain is in the problem
   for (const RelativeFactor& f : relative_) {
     if (!f.active || (!free(f.from) && !free(f.to))) continue;
     joins_held = joins_held || !free(f.from) || !free(f.to);
@@ -731,7 +736,14 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
     const ComponentMask& mask = measures_attitude(f) ? kAllMask : kPlanarMask;
     mark(f.from, mask);
     mark(f.to, mask);
-    problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
+    const ceres::ResidualBlockId block =
+        problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
+    const bool consecutive = f.to == f.from + 1 || f.from == f.to + 1;
+    if (f.kind == RelativeKind::kOdometry ||
+        ((f.kind == RelativeKind::kSe2 || f.kind == RelativeKind::kSe3) && consecutive)) {
+      chain.insert(block);
+      has_chain = true;
+    }
   }
   // PoseGraphConfig::attitude_from_absolute: z, roll and pitch that no relative factor measures are
   // the one absolute factor's, held.
@@ -752,9 +764,9 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
       x(kPitch) = f.z_roll_pitch(2);
       continue;
     }
-    problem.AddResidualBlock(
+    chain.insert(problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
-        nullptr, work.at(f.id).data());
+        nullptr, work.at(f.id).data()));
     mark(f.id, kAbsoluteMask);
   }
   if (problem.NumResidualBlocks() == 0) return Error{"pose graph: nothing to optimize (no factors)"};
@@ -795,6 +807,18 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   options.minimizer_progress_to_stdout = false;
   std::string note;
   detail::selectLinearSolver(options, config_.sparse_backend, result.linear_solver, note);
+  if (config_.linear_solver == LinearSolver::kChainPreconditionedCg &&
+      options.linear_solver_type == ceres::SPARSE_NORMAL_CHOLESKY) {
+    if (has_chain) {
+      options.linear_solver_type = ceres::CGNR;
+      options.preconditioner_type = ceres::SUBSET;
+      options.residual_blocks_for_subset_preconditioner = std::move(chain);
+      result.linear_solver =
+          "CGNR/SUBSET(chain, absolute)/" + result.linear_solver.substr(result.linear_solver.find('/') + 1);
+    } else {
+      note += "No odometry chain to precondition conjugate gradients with; factorised exactly. ";
+    }
+  }
   std::string why;
   if (!options.IsValid(&why)) return Error{"pose graph: invalid solver options: " + why};
 

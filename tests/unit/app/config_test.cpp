@@ -103,6 +103,7 @@ TEST(VogdConfig, DocumentedValuesAreTheDefaults) {
   EXPECT_EQ(a.mapping.local_optimization_nodes, b.mapping.local_optimization_nodes);
   EXPECT_EQ(a.mapping.full_optimization_every, b.mapping.full_optimization_every);
   EXPECT_EQ(a.mapping.graph.sparse_backend, b.mapping.graph.sparse_backend);
+  EXPECT_EQ(a.mapping.graph.linear_solver, b.mapping.graph.linear_solver);
   EXPECT_EQ(a.mapping.graph.attitude_from_absolute, b.mapping.graph.attitude_from_absolute);
   EXPECT_EQ(a.merge.remerge_translation_m, b.merge.remerge_translation_m);
   EXPECT_NEAR(a.merge.remerge_rotation_rad, b.merge.remerge_rotation_rad, 1e-6);
@@ -250,6 +251,12 @@ TEST(VogdConfig, WrongTypesAndSyntaxAreRefused) {
   EXPECT_NE(errorOf("source: devices\nmapping: {sparse_backend: cxsparse}\n")
                 .find("mapping.sparse_backend: must be one of eigen, suitesparse, got 'cxsparse'"),
             std::string::npos);
+  EXPECT_NE(errorOf("source: devices\nmapping: {linear_solver: qr}\n")
+                .find("mapping.linear_solver: must be one of cholesky, cg, got 'qr'"),
+            std::string::npos);
+  auto cg = parse("source: sim\nsim: {scene: scenes/pilings.yaml}\nmapping: {linear_solver: cg}\n");
+  ASSERT_TRUE(cg.ok()) << cg.error().message;
+  EXPECT_EQ(cg->mapping.graph.linear_solver, slam::LinearSolver::kChainPreconditionedCg);
   EXPECT_NE(errorOf("source: devices\nmapping: [1, 2]\n").find("mapping: must be a mapping"), std::string::npos);
   EXPECT_NE(errorOf("source: devices\nmapping:\n  grid: {resolution_m: 0.1\n").find("test.yaml:"), std::string::npos);
   EXPECT_NE(errorOf("- 1\n- 2\n").find("must be a mapping of sections"), std::string::npos);

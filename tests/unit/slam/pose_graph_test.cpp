@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 
 namespace vog::slam {
 namespace {
@@ -297,6 +299,62 @@ TEST(PoseGraph, SparseBackendsReachTheSameOptimum) {
   for (std::size_t i = 0; i < s.truth.size(); ++i) {
     EXPECT_LT(geometry::translationDistance(optimum[0][i], optimum[1][i]), 1e-9) << i;
     EXPECT_LT(geometry::rotationAngle(optimum[0][i], optimum[1][i]), 1e-9) << i;
+  }
+}
+
+// Conjugate gradients preconditioned by the odometry chain solve the same problem inexactly step by
+// step: run to the library's tolerances they reach the factorisation's optimum, with the chain as
+// odometry factors or as SE2 factors between consecutive ids (as a g2o file gives). With SE2 factors
+// between every second id only there is no chain: the solve factorises and says so.
+TEST(PoseGraph, ChainPreconditionedConjugateGradientsReachTheCholeskyOptimum) {
+  const Scenario s = makeScenario(4, 40);
+  const Eigen::Matrix3d abs_info =
+      Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp), 1 / (kSigmaRp * kSigmaRp)).asDiagonal();
+  enum class Chain { kOdometry, kSe2, kNone };
+  const auto solveWith = [&](LinearSolver solver, Chain chain, OptimizeResult& result) {
+    PoseGraphConfig config;
+    config.linear_solver = solver;
+    PoseGraph g = chain == Chain::kOdometry ? buildGraph(s, config) : PoseGraph::create(config).value();
+    if (chain != Chain::kOdometry) {  // odometry as SE2 factors, or every second node only with none
+      const std::size_t step = chain == Chain::kNone ? 2 : 1;
+      for (std::size_t i = 0; i < s.truth.size(); i += step) {
+        EXPECT_TRUE(g.addNode(static_cast<NodeId>(i), s.dead_reckoning[i]).ok());
+        EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], abs_info).ok());
+        if (i == 0) continue;
+        const Eigen::Vector3d d = planarOdometry(s.dead_reckoning[i - step], s.dead_reckoning[i]);
+        EXPECT_TRUE(
+            g.addSe2Factor(static_cast<NodeId>(i - step), static_cast<NodeId>(i), d, odometryInformation()).ok());
+      }
+    }
+    addTrueClosures(g, s, 40);
+    auto r = g.optimize();
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    if (!r.ok()) return std::vector<Pose3>{};
+    EXPECT_TRUE(r->converged) << r->message;
+    EXPECT_LT(r->final_cost, r->initial_cost);
+    result = *r;
+    std::vector<Pose3> poses;
+    for (const NodeId id : g.nodeIds()) poses.push_back(*g.pose(id));
+    return poses;
+  };
+  for (const Chain chain : {Chain::kOdometry, Chain::kSe2, Chain::kNone}) {
+    SCOPED_TRACE(chain == Chain::kOdometry ? "odometry" : chain == Chain::kSe2 ? "SE2" : "no chain");
+    OptimizeResult exact_result, cg_result;
+    const std::vector<Pose3> exact = solveWith(LinearSolver::kSparseCholesky, chain, exact_result);
+    const std::vector<Pose3> cg = solveWith(LinearSolver::kChainPreconditionedCg, chain, cg_result);
+    ASSERT_EQ(exact.size(), cg.size());
+    ASSERT_FALSE(exact.empty());
+    EXPECT_EQ(exact_result.linear_solver, "SPARSE_NORMAL_CHOLESKY/SUITE_SPARSE");
+    if (chain == Chain::kNone) {
+      EXPECT_EQ(cg_result.linear_solver, "SPARSE_NORMAL_CHOLESKY/SUITE_SPARSE");
+      EXPECT_NE(cg_result.message.find("No odometry chain"), std::string::npos) << cg_result.message;
+    } else {
+      EXPECT_EQ(cg_result.linear_solver, "CGNR/SUBSET(chain, absolute)/SUITE_SPARSE");
+    }
+    for (std::size_t i = 0; i < exact.size(); ++i) {
+      EXPECT_LT(geometry::translationDistance(exact[i], cg[i]), 1e-4) << i;
+      EXPECT_LT(geometry::rotationAngle(exact[i], cg[i]), 1e-5) << i;
+    }
   }
 }
 

@@ -36,6 +36,20 @@ enum class RobustLoss { kNone, kHuber, kCauchy };
 // rounding, about 1e-14 m); their speed differs with the graph (measured in daemon/slam/README.md).
 enum class SparseBackend { kEigen, kSuiteSparse };
 
+// How each Levenberg-Marquardt step's linear system is solved.
+//  - kSparseCholesky: the normal equations factorised exactly on `sparse_backend`. Each loop closure
+//    adds fill-in; on a survey repeated over the same lanes, where every pass closes loops with every
+//    earlier one, the factorisation's cost grows much faster than the graph.
+//  - kChainPreconditionedCg: conjugate gradients on the normal equations (Ceres' CGNR), preconditioned
+//    by the exact factorisation of the odometry chain alone: the odometry factors, SE2 / SE3 factors
+//    between consecutive ids (a g2o file's odometry) and the absolute factors (Ceres' SUBSET
+//    preconditioner; a chain has no fill-in; subgraph preconditioning, Dellaert et al., IROS 2010).
+//    Each step costs products with the Jacobian, linear in the factors, times the CG iterations,
+//    which grow with the loops. The step is inexact (truncated Newton), so a solve stops near, not at,
+//    the optimum the factorisation reaches (within the function tolerance). Without a chain in the
+//    problem, factorised as above (OptimizeResult::message says so).
+enum class LinearSolver { kSparseCholesky, kChainPreconditionedCg };
+
 struct PoseGraphConfig {
   RobustLoss loop_closure_loss = RobustLoss::kCauchy;
   // Scale of the robust loss in whitened units (standard deviations): residuals beyond it are
@@ -53,6 +67,7 @@ struct PoseGraphConfig {
   // (gauge freedom). Its z, roll and pitch stay free under its absolute factor.
   bool anchor_first_node = true;
   SparseBackend sparse_backend = SparseBackend::kSuiteSparse;
+  LinearSolver linear_solver = LinearSolver::kSparseCholesky;
   // A node whose z, roll and pitch no relative factor measures (odometry, SE2 factors and closures
   // of the planar registration do not) takes them from its one absolute factor and holds them, as
   // thesis 4.1 reduces the vehicle's pose estimation to x, y and yaw: three unknowns per node instead
