@@ -698,8 +698,9 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   };
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
-  // LinearSolver::kChainPreconditionedCg's preconditioner: the odometry, the SE2 / SE3 factors between
-  // consecutive ids (a g2o file's odometry edges) and the absolute factors.
+  // LinearSolver::kChainPreconditionedCg's preconditioner, collected only for it: the odometry, the
+  // SE2 / SE3 factors between consecutive ids (a g2o file's odometry edges) and the absolute factors.
+  const bool use_cg = config_.linear_solver == LinearSolver::kChainPreconditionedCg;
   std::unordered_set<ceres::ResidualBlockId> chain;
   bool has_chain = false;  // some relative factor of the chain is in the problem
   for (const RelativeFactor& f : relative_) {
@@ -739,8 +740,8 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
     const ceres::ResidualBlockId block =
         problem.AddResidualBlock(cost, loss, work.at(f.from).data(), work.at(f.to).data());
     const bool consecutive = f.to == f.from + 1 || f.from == f.to + 1;
-    if (f.kind == RelativeKind::kOdometry ||
-        ((f.kind == RelativeKind::kSe2 || f.kind == RelativeKind::kSe3) && consecutive)) {
+    if (use_cg && (f.kind == RelativeKind::kOdometry ||
+                   ((f.kind == RelativeKind::kSe2 || f.kind == RelativeKind::kSe3) && consecutive))) {
       chain.insert(block);
       has_chain = true;
     }
@@ -764,9 +765,10 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
       x(kPitch) = f.z_roll_pitch(2);
       continue;
     }
-    chain.insert(problem.AddResidualBlock(
+    const ceres::ResidualBlockId block = problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<AbsoluteCost, 3, 6>(new AbsoluteCost(f.z_roll_pitch, f.sqrt_information)),
-        nullptr, work.at(f.id).data()));
+        nullptr, work.at(f.id).data());
+    if (use_cg) chain.insert(block);
     mark(f.id, kAbsoluteMask);
   }
   if (problem.NumResidualBlocks() == 0) return Error{"pose graph: nothing to optimize (no factors)"};
@@ -807,8 +809,7 @@ Result<OptimizeResult> PoseGraph::solve(const std::function<bool(NodeId)>& free,
   options.minimizer_progress_to_stdout = false;
   std::string note;
   detail::selectLinearSolver(options, config_.sparse_backend, result.linear_solver, note);
-  if (config_.linear_solver == LinearSolver::kChainPreconditionedCg &&
-      options.linear_solver_type == ceres::SPARSE_NORMAL_CHOLESKY) {
+  if (use_cg && options.linear_solver_type == ceres::SPARSE_NORMAL_CHOLESKY) {
     if (has_chain) {
       options.linear_solver_type = ceres::CGNR;
       options.preconditioner_type = ceres::SUBSET;

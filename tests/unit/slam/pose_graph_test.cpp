@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -35,6 +34,10 @@ Eigen::Matrix3d odometryInformation() {
   cov << kSigmaXy * kSigmaXy, 0.3 * kSigmaXy * kSigmaXy, 0.0, 0.3 * kSigmaXy * kSigmaXy, kSigmaXy * kSigmaXy, 0.0, 0.0,
       0.0, kSigmaYaw * kSigmaYaw;  // correlated x-y noise: a non-diagonal information
   return cov.inverse();
+}
+
+Eigen::Matrix3d absoluteInformation() {
+  return Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp), 1 / (kSigmaRp * kSigmaRp)).asDiagonal();
 }
 
 Matrix6d closureInformation() {
@@ -91,11 +94,9 @@ PoseGraph buildGraph(const Scenario& s, const PoseGraphConfig& config) {
   auto graph = PoseGraph::create(config);
   EXPECT_TRUE(graph.ok());
   PoseGraph g = std::move(*graph);
-  const Eigen::Matrix3d abs_info =
-      Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp), 1 / (kSigmaRp * kSigmaRp)).asDiagonal();
   for (std::size_t i = 0; i < s.truth.size(); ++i) {
     EXPECT_TRUE(g.addNode(static_cast<NodeId>(i), s.dead_reckoning[i]).ok());
-    EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], abs_info).ok());
+    EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], absoluteInformation()).ok());
     if (i > 0) {
       EXPECT_TRUE(g.addOdometryFactor(static_cast<NodeId>(i - 1), static_cast<NodeId>(i), s.odometry[i - 1],
                                       odometryInformation())
@@ -308,8 +309,6 @@ TEST(PoseGraph, SparseBackendsReachTheSameOptimum) {
 // between every second id only there is no chain: the solve factorises and says so.
 TEST(PoseGraph, ChainPreconditionedConjugateGradientsReachTheCholeskyOptimum) {
   const Scenario s = makeScenario(4, 40);
-  const Eigen::Matrix3d abs_info =
-      Eigen::Vector3d(1 / (kSigmaZ * kSigmaZ), 1 / (kSigmaRp * kSigmaRp), 1 / (kSigmaRp * kSigmaRp)).asDiagonal();
   enum class Chain { kOdometry, kSe2, kNone };
   const auto solveWith = [&](LinearSolver solver, Chain chain, OptimizeResult& result) {
     PoseGraphConfig config;
@@ -319,7 +318,7 @@ TEST(PoseGraph, ChainPreconditionedConjugateGradientsReachTheCholeskyOptimum) {
       const std::size_t step = chain == Chain::kNone ? 2 : 1;
       for (std::size_t i = 0; i < s.truth.size(); i += step) {
         EXPECT_TRUE(g.addNode(static_cast<NodeId>(i), s.dead_reckoning[i]).ok());
-        EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], abs_info).ok());
+        EXPECT_TRUE(g.addAbsoluteFactor(static_cast<NodeId>(i), s.absolute[i], absoluteInformation()).ok());
         if (i == 0) continue;
         const Eigen::Vector3d d = planarOdometry(s.dead_reckoning[i - step], s.dead_reckoning[i]);
         EXPECT_TRUE(
